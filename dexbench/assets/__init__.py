@@ -1,0 +1,1 @@
+"""Robot model assets: where arm and hand MJCF files come from."""

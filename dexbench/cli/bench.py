@@ -1,0 +1,111 @@
+"""`python bench.py sim key=value ...`: environment throughput vs raw physics.
+
+`env_steps_per_s` counts control steps of `DexEnv.step` (actions validated, physics,
+success, reward, observations). `raw_physics_steps_per_s` steps the very same compiled
+model with `mujoco.batch` alone, from the same states and with the same controls.
+`ratio` = env physics throughput (env steps/s x decimation) / raw physics steps/s.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+
+import mujoco
+import mujoco.batch
+import torch
+from tqdm import tqdm
+
+from dexbench.cli.config import env_kwargs, load_config, new_run_dir, write_atomic
+from dexbench.envs.dex_env import DexEnv
+from dexbench.tasks.registry import make_env
+
+USAGE = "usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=...] ..."
+
+
+def _actions(env: DexEnv, count: int, noise: float, seed: int) -> list[torch.Tensor]:
+    gen = torch.Generator().manual_seed(seed)
+    span = env.action_high - env.action_low
+    out = []
+    for _ in range(count):
+        eps = torch.randn(env.num_envs, env.action_dim, generator=gen, dtype=torch.float64)
+        out.append(torch.clamp(env.home_action + noise * span * eps, env.action_low,
+                               env.action_high))
+    return out
+
+
+def bench_sim(overrides: list[str]) -> dict:
+    cfg = load_config("bench", overrides)
+    env = make_env(**env_kwargs(cfg))
+    run_dir = new_run_dir("bench", f"sim-{env.task.name}-{env.embodiment.name}", cfg)
+    n, steps, warmup = env.num_envs, int(cfg.steps), int(cfg.warmup)
+    actions = _actions(env, 16, float(cfg.action_noise), int(cfg.seed))
+    env.reset()
+    start_state = env.sim.get_state()
+    for i in tqdm(range(warmup), desc="warm-up", leave=False):
+        env.step(actions[i % len(actions)])
+    env.reset()
+    t0 = time.perf_counter()
+    for i in tqdm(range(steps), desc=f"env x{n}", leave=False):
+        env.step(actions[i % len(actions)])
+    env_time = time.perf_counter() - t0
+
+    raw = mujoco.batch.Batch(env.scene.model, n, nthread=env.sim.nthread)
+    raw.state[:] = start_state.numpy()
+    ctrl = raw.bind("ctrl")
+    raw_actions = [a.numpy() for a in actions]
+    for i in range(warmup):
+        ctrl[:] = raw_actions[i % len(raw_actions)]
+        raw.step(nstep=env.decimation)
+    raw.state[:] = start_state.numpy()
+    t0 = time.perf_counter()
+    for i in tqdm(range(steps), desc=f"raw x{n}", leave=False):
+        ctrl[:] = raw_actions[i % len(raw_actions)]
+        raw.step(nstep=env.decimation)
+    raw_time = time.perf_counter() - t0
+
+    env_sps = n * steps / env_time
+    raw_sps = n * steps * env.decimation / raw_time
+    result = {
+        "benchmark": "sim",
+        "task": env.task.name,
+        "embodiment": env.embodiment.name,
+        "backend": cfg.sim.backend,
+        "num_envs": n,
+        "nthread": env.sim.nthread,
+        "steps": steps,
+        "decimation": env.decimation,
+        "env_steps_per_s": round(env_sps, 1),
+        "env_physics_steps_per_s": round(env_sps * env.decimation, 1),
+        "raw_physics_steps_per_s": round(raw_sps, 1),
+        "ratio": round(env_sps * env.decimation / raw_sps, 4),
+        "mujoco": mujoco.__version__,
+        "torch": torch.__version__,
+        "cpu": platform.processor() or platform.machine(),
+        "run_dir": str(run_dir),
+    }
+    write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
+    return result
+
+
+def format_table(result: dict) -> str:
+    rows = [("task", result["task"]), ("embodiment", result["embodiment"]),
+            ("backend", f"{result['backend']} ({result['nthread']} threads)"),
+            ("num_envs", result["num_envs"]), ("decimation", result["decimation"]),
+            ("env steps/s (60 Hz control)", f"{result['env_steps_per_s']:,.0f}"),
+            ("env physics steps/s", f"{result['env_physics_steps_per_s']:,.0f}"),
+            ("raw physics steps/s", f"{result['raw_physics_steps_per_s']:,.0f}"),
+            ("ratio env/raw", f"{result['ratio']:.3f}")]
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] != "sim":
+        print(USAGE)
+        return 2
+    result = bench_sim(argv[1:])
+    print(format_table(result))
+    print(json.dumps(result))
+    return 0

@@ -1,0 +1,133 @@
+"""Facts about a hand derived from its model, so no hand needs hand-tuned mount poses.
+
+The *hand frame* H has its origin at the palm body, x along the fingers (palm towards
+the mean non-thumb fingertip with the hand open) and z along the palm normal (the way
+the fingers curl when the hand closes). Every mount places H, not the model's root, so
+"palm down, fingers forward" means the same thing for all six hands. Everything here is
+expressed in the hand file's world frame, which is what `MjSpec.attach` places.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from dexbench.assets.robots import robot_spec
+from dexbench.embodiments.hands import HANDS, SYNERGIES, HandSpec
+
+_SETTLE_STEPS = 400
+
+
+@dataclass(frozen=True)
+class HandGeometry:
+    """Hand-frame pose, fingertip points and synergy targets of one hand side."""
+
+    frame_pos: np.ndarray  # (3,) origin of H in the hand file's world frame
+    frame_rot: np.ndarray  # (3, 3) columns: H's x (fingers), y, z (palm normal)
+    fingertip_offsets: tuple[np.ndarray, ...]  # per fingertip body, in its body frame
+    palm_site_pos: np.ndarray  # H's origin in the palm body frame
+    palm_site_quat: np.ndarray  # H's orientation in the palm body frame
+    back_extent: float  # how far (m) the hand reaches behind H's origin along -x
+    actuators: tuple[str, ...]  # unprefixed actuator names, model order
+    synergies: dict[str, np.ndarray]  # name -> (nu_hand,) targets
+    open_qpos: dict[str, float]  # settled joint positions of the open hand, by joint
+
+
+def hand_model_spec(hand: HandSpec, side: str) -> mujoco.MjSpec:
+    """The hand's spec with its keyframes removed (they would not fit a composed scene)."""
+    spec = robot_spec(hand.collection, hand.sides[side].entry)
+    for key in list(spec.keys):
+        spec.delete(key)
+    return spec
+
+
+def synergy_targets(
+    patterns: dict[str, float], names: tuple[str, ...], ranges: np.ndarray, base: np.ndarray
+) -> np.ndarray:
+    """Resolve a synergy's name patterns into per-actuator targets, clipped to range."""
+    out = base.copy()
+    for i, name in enumerate(names):
+        for pattern, value in patterns.items():
+            if re.search(pattern, name):
+                out[i] = value
+                break
+    return np.clip(out, ranges[:, 0], ranges[:, 1])
+
+
+def _settle(model: mujoco.MjModel, data: mujoco.MjData, ctrl: np.ndarray) -> None:
+    mujoco.mj_resetData(model, data)
+    data.ctrl[:] = ctrl
+    for _ in range(_SETTLE_STEPS):
+        mujoco.mj_step(model, data)
+
+
+@functools.cache
+def hand_geometry(hand_name: str, side: str) -> HandGeometry:
+    """Measure one hand side by closing it in a gravity-free standalone simulation."""
+    hand = HANDS[hand_name]
+    parts = hand.sides[side]
+    spec = hand_model_spec(hand, side)
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    spec.option.timestep = 0.002
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    names = tuple(model.actuator(i).name for i in range(model.nu))
+    ranges = model.actuator_ctrlrange.copy()
+    zero = np.zeros(model.nu)
+    open_ = synergy_targets(hand.synergies.get("open", {}), names, ranges, zero)
+    synergies = {
+        s: synergy_targets(hand.synergies.get(s, {}), names, ranges, open_) for s in SYNERGIES
+    }
+
+    palm = model.body(parts.palm_body).id
+    tips = [model.body(b).id for b in parts.fingertip_bodies]
+    _settle(model, data, synergies["open"])
+    open_qpos = {
+        model.joint(j).name: float(data.qpos[model.jnt_qposadr[j]]) for j in range(model.njnt)
+    }
+    palm_pos = data.xpos[palm].copy()
+    open_tips = data.xipos[tips[1:]].mean(axis=0)
+    geom_corners = _geom_corners(model, data)
+    _settle(model, data, synergies["power"])
+    closed_tips = data.xipos[tips[1:]].mean(axis=0)
+
+    x = open_tips - palm_pos
+    x /= np.linalg.norm(x)
+    curl = closed_tips - open_tips
+    z = curl - curl.dot(x) * x
+    z /= np.linalg.norm(z)
+    rot = np.column_stack([x, np.cross(z, x), z])
+
+    mujoco.mj_resetData(model, data)
+    mujoco.mj_kinematics(model, data)
+    palm_rot = data.xmat[palm].reshape(3, 3)
+    site_quat = np.zeros(4)
+    mujoco.mju_mat2Quat(site_quat, (palm_rot.T @ rot).ravel())
+    back = float(max(0.0, -np.min((geom_corners - palm_pos) @ x)))
+    return HandGeometry(
+        frame_pos=palm_pos,
+        frame_rot=rot,
+        fingertip_offsets=tuple(model.body_ipos[t].copy() for t in tips),
+        palm_site_pos=palm_rot.T @ (palm_pos - data.xpos[palm]),
+        palm_site_quat=site_quat,
+        back_extent=back,
+        actuators=names,
+        synergies=synergies,
+        open_qpos=open_qpos,
+    )
+
+
+def _geom_corners(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    """World-frame corners of every collision-or-visual geom's bounding box."""
+    signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
+    corners = []
+    for g in range(model.ngeom):
+        center, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+        local = center + signs * half
+        corners.append(data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T)
+    return np.concatenate(corners)

@@ -1,0 +1,247 @@
+"""The six dexterous hands: where their models come from and what their parts mean.
+
+Everything here is data. Geometry-derived facts (the hand frame used for mounting, the
+fingertip points) are computed from the models by `hand_frame.py`, so a hand is added by
+writing one `HandSpec` and nothing else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+SIDES = ("right", "left")
+
+
+@dataclass(frozen=True)
+class HandSide:
+    """One side (right or left) of a hand model: its file and its named parts."""
+
+    entry: str
+    palm_body: str
+    fingertip_bodies: tuple[str, ...]  # thumb first, then index, middle, ...
+
+
+@dataclass(frozen=True)
+class HandSpec:
+    """A dexterous hand.
+
+    Synergies map a regular expression over actuator names (without any prefix) to a
+    joint target in radians; targets are clipped to the actuator's control range and
+    actuators no pattern matches get the `open` target (or 0 clipped to range). The
+    first matching pattern wins.
+    """
+
+    name: str
+    collection: str
+    sides: dict[str, HandSide]
+    synergies: dict[str, dict[str, float]] = field(default_factory=dict)
+    # Distance (m) from the arm flange to the hand root along the finger axis, for hands
+    # whose root sits inside the palm rather than at its base.
+    mount_offset: float = 0.0
+
+
+def _shadow_side(p: str) -> HandSide:
+    return HandSide(
+        entry=f"{'right' if p == 'rh' else 'left'}_hand",
+        palm_body=f"{p}_palm",
+        fingertip_bodies=tuple(f"{p}_{f}distal" for f in ("th", "ff", "mf", "rf", "lf")),
+    )
+
+
+def _allegro_side(entry: str) -> HandSide:
+    return HandSide(
+        entry=entry,
+        palm_body="palm",
+        fingertip_bodies=("th_tip", "ff_tip", "mf_tip", "rf_tip"),
+    )
+
+
+def _leap_side(entry: str) -> HandSide:
+    return HandSide(
+        entry=entry,
+        palm_body="palm",
+        fingertip_bodies=("th_ds", "if_ds", "mf_ds", "rf_ds"),
+    )
+
+
+def _sharpa_side(side: str) -> HandSide:
+    return HandSide(
+        entry=f"{side}_hand",
+        palm_body=f"{side}_hand_C_MC",
+        fingertip_bodies=tuple(
+            f"{side}_{f}_DP" for f in ("thumb", "index", "middle", "ring", "pinky")
+        ),
+    )
+
+
+def _inspire_side(side: str) -> HandSide:
+    s = side[0]
+    return HandSide(
+        entry=f"inspire_{side}_hand.xml",
+        palm_body=f"{s}_palm",
+        fingertip_bodies=tuple(
+            f"{s}_{f}_distal" for f in ("thumb", "index", "middle", "ring", "pinky")
+        ),
+    )
+
+
+def _wuji_side(side: str) -> HandSide:
+    return HandSide(
+        entry=f"mjcf/{side}.xml",
+        palm_body=f"{side}_palm_link",
+        fingertip_bodies=tuple(f"{side}_finger{i}_link4" for i in range(1, 6)),
+    )
+
+
+HANDS: dict[str, HandSpec] = {
+    "shadow": HandSpec(
+        name="shadow",
+        collection="shadow_hand",
+        sides={"right": _shadow_side("rh"), "left": _shadow_side("lh")},
+        synergies={
+            "open": {},
+            "power": {
+                r"A_(FF|MF|RF|LF)J3$": 1.0,
+                r"A_(FF|MF|RF|LF)J0$": 2.0,
+                r"A_THJ5$": 0.6,
+                r"A_THJ4$": 1.2,
+                r"A_THJ2$": 0.4,
+                r"A_THJ1$": 0.8,
+            },
+            "pinch": {
+                r"A_FFJ3$": 0.9,
+                r"A_FFJ0$": 1.0,
+                r"A_(MF|RF|LF)J3$": 1.4,
+                r"A_(MF|RF|LF)J0$": 2.4,
+                r"A_THJ5$": 0.4,
+                r"A_THJ4$": 1.2,
+                r"A_THJ2$": 0.5,
+                r"A_THJ1$": 0.5,
+            },
+        },
+    ),
+    "allegro": HandSpec(
+        name="allegro",
+        collection="wonik_allegro",
+        sides={"right": _allegro_side("right_hand"), "left": _allegro_side("left_hand")},
+        synergies={
+            "open": {r"tha0$": 0.3},
+            "power": {
+                r"(ff|mf|rf)a1$": 1.2,
+                r"(ff|mf|rf)a[23]$": 0.9,
+                r"tha0$": 1.3,
+                r"tha1$": 0.5,
+                r"tha[23]$": 0.8,
+            },
+            "pinch": {
+                r"ffa1$": 1.0,
+                r"ffa[23]$": 0.6,
+                r"(mf|rf)a1$": 1.5,
+                r"(mf|rf)a[23]$": 1.5,
+                r"tha0$": 1.3,
+                r"tha1$": 0.7,
+                r"tha[23]$": 0.6,
+            },
+        },
+        mount_offset=0.095,
+    ),
+    "leap": HandSpec(
+        name="leap",
+        collection="leap_hand",
+        sides={"right": _leap_side("right_hand"), "left": _leap_side("left_hand")},
+        synergies={
+            "open": {},
+            "power": {
+                r"(if|mf|rf)_mcp_act$": 1.2,
+                r"(if|mf|rf)_(pip|dip)_act$": 0.9,
+                r"th_cmc_act$": 1.2,
+                r"th_axl_act$": 1.4,
+                r"th_mcp_act$": 0.4,
+                r"th_ipl_act$": 0.6,
+            },
+            "pinch": {
+                r"if_mcp_act$": 1.0,
+                r"if_(pip|dip)_act$": 0.6,
+                r"(mf|rf)_mcp_act$": 1.8,
+                r"(mf|rf)_(pip|dip)_act$": 1.5,
+                r"th_cmc_act$": 1.3,
+                r"th_axl_act$": 1.5,
+                r"th_mcp_act$": 0.3,
+                r"th_ipl_act$": 0.5,
+            },
+        },
+    ),
+    "sharpa": HandSpec(
+        name="sharpa",
+        collection="sharpa_wave",
+        sides={"right": _sharpa_side("right"), "left": _sharpa_side("left")},
+        synergies={
+            "open": {},
+            "power": {
+                r"_(index|middle|ring|pinky)_MCP_FE_ctrl$": 1.0,
+                r"_(index|middle|ring|pinky)_(PIP|DIP)_ctrl$": 1.0,
+                r"_thumb_CMC_FE_ctrl$": 1.2,
+                r"_thumb_CMC_AA_ctrl$": 0.3,
+                r"_thumb_MCP_FE_ctrl$": 0.5,
+                r"_thumb_IP_ctrl$": 0.6,
+            },
+            "pinch": {
+                r"_index_MCP_FE_ctrl$": 0.9,
+                r"_index_(PIP|DIP)_ctrl$": 0.6,
+                r"_(middle|ring|pinky)_MCP_FE_ctrl$": 1.5,
+                r"_(middle|ring|pinky)_(PIP|DIP)_ctrl$": 1.4,
+                r"_thumb_CMC_FE_ctrl$": 1.3,
+                r"_thumb_CMC_AA_ctrl$": 0.3,
+                r"_thumb_MCP_FE_ctrl$": 0.4,
+                r"_thumb_IP_ctrl$": 0.4,
+            },
+        },
+    ),
+    "inspire": HandSpec(
+        name="inspire",
+        collection="inspire_hand",
+        sides={"right": _inspire_side("right"), "left": _inspire_side("left")},
+        synergies={
+            "open": {},
+            "power": {
+                r"(index|middle|ring|pinky)_proximal_drive$": 1.2,
+                r"(index|middle|ring|pinky)_distal_drive$": 1.3,
+                r"thumb_proximal_1_drive$": 1.2,
+                r"thumb_(proximal_2|middle|distal)_drive$": 0.5,
+            },
+            "pinch": {
+                r"index_proximal_drive$": 0.9,
+                r"index_distal_drive$": 0.9,
+                r"(middle|ring|pinky)_(proximal|distal)_drive$": 1.6,
+                r"thumb_proximal_1_drive$": 1.3,
+                r"thumb_(proximal_2|middle|distal)_drive$": 0.4,
+            },
+        },
+    ),
+    "wuji": HandSpec(
+        name="wuji",
+        collection="wuji_hand",
+        sides={"right": _wuji_side("right"), "left": _wuji_side("left")},
+        synergies={
+            "open": {},
+            "power": {
+                r"finger[2-5]_joint1_actuator$": 1.1,
+                r"finger[2-5]_joint[34]_actuator$": 1.0,
+                r"finger1_joint1_actuator$": 1.2,
+                r"finger1_joint2_actuator$": 0.6,
+                r"finger1_joint[34]_actuator$": 0.6,
+            },
+            "pinch": {
+                r"finger2_joint1_actuator$": 0.9,
+                r"finger2_joint[34]_actuator$": 0.6,
+                r"finger[3-5]_joint1_actuator$": 1.5,
+                r"finger[3-5]_joint[34]_actuator$": 1.4,
+                r"finger1_joint1_actuator$": 1.3,
+                r"finger1_joint2_actuator$": 0.6,
+                r"finger1_joint[34]_actuator$": 0.4,
+            },
+        },
+    ),
+}
+
+SYNERGIES = ("open", "power", "pinch")

@@ -1,0 +1,199 @@
+"""The batched environment: N copies of one task on one embodiment and backend.
+
+Actions are absolute joint-position targets for every actuator, (N, action_dim), held
+for one control period (`control_dt`, 60 Hz by default). Observations are a dict of
+group -> float32 tensor on the backend's device; groups a task does not populate are
+absent. `terminated` is success, `truncated` the time limit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from dexbench.envs.arena import PhysicsOptions
+from dexbench.envs.observations import ObservationTerms, resolve_groups
+from dexbench.envs.scene import compose_scene
+from dexbench.envs.task_api import SceneView, Task
+from dexbench.sim.factory import make_backend
+
+Obs = dict[str, torch.Tensor]
+
+
+class InvalidActionError(ValueError):
+    """An action batch with the wrong shape or non-finite values."""
+
+
+class DexEnv:
+    """Batched dexterous-manipulation environment.
+
+    `obs` is a preset name or a list of groups; `history` overrides the preset's history
+    length (k > 0 stacks the last k frames on axis 1). With `auto_reset`, environments
+    that terminate or truncate are reset inside `step`.
+    """
+
+    def __init__(
+        self,
+        task: Task,
+        embodiment: str,
+        num_envs: int = 1,
+        seed: int = 0,
+        obs: str | list[str] = "state",
+        backend: str = "cpu",
+        nthread: int = 0,
+        physics: PhysicsOptions | None = None,
+        auto_reset: bool = False,
+        history: int | None = None,
+    ) -> None:
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        self.task = task
+        self.seed = seed
+        self.num_envs = num_envs
+        self.auto_reset = auto_reset
+        self.physics = physics or PhysicsOptions()
+        self.decimation = self.physics.decimation
+        self.control_dt = self.decimation * self.physics.timestep
+        self.episode_steps = round(task.episode_seconds / self.control_dt)
+        self.scene = compose_scene(task, embodiment, self.physics)
+        self.embodiment = self.scene.embodiment
+        model = self.scene.model
+        self.sim = make_backend(backend, model, num_envs, nthread)
+        self.device = self.sim.device
+        fields = {n: self.sim.field(n) for n in ("qpos", "qvel", "ctrl", "xpos", "xquat",
+                                                  "site_xpos", "sensordata")}
+        self._f = fields
+        sites = [s for side in self.embodiment.sides.values() for s in side.fingertip_sites]
+        palms = [side.palm_site for side in self.embodiment.sides.values()]
+        self.view = SceneView(model, fields, sites, palms)
+        self.groups, self.history = resolve_groups(obs)
+        if history is not None:
+            self.history = history
+        self._terms = ObservationTerms(self.scene, self.view, task, fields)
+
+        emb = self.embodiment
+        self.action_low = torch.tensor(emb.ctrl_range[:, 0], device=self.device)
+        self.action_high = torch.tensor(emb.ctrl_range[:, 1], device=self.device)
+        self.home_action = torch.tensor(emb.poses["home"], device=self.device)
+        home = emb.home_qpos
+        self._home_qadr = torch.tensor([model.joint(j).qposadr[0] for j in home])
+        self._home_qval = torch.tensor(list(home.values()), dtype=torch.float64)
+        self._episode = np.zeros(num_envs, dtype=np.int64)
+        self.steps = torch.zeros(num_envs, dtype=torch.long, device=self.device)
+        self.last_action = self.home_action.repeat(num_envs, 1).float()
+        self._history: Obs = {}
+        for body in task.tracked_bodies:
+            self.view.initial_body_pos[body] = torch.zeros(num_envs, 3, dtype=torch.float64,
+                                                           device=self.device)
+
+    @property
+    def action_dim(self) -> int:
+        return self.embodiment.action_dim
+
+    def obs_shapes(self) -> dict[str, tuple[int, ...]]:
+        """Shape of each group one environment returns (no batch axis)."""
+        return {k: tuple(v.shape[1:]) for k, v in self._observe().items()}
+
+    def reseed(self, seed: int) -> None:
+        """Restart every environment's reset stream from `seed` (takes effect at reset)."""
+        self.seed = seed
+        self._episode[:] = 0
+
+    def _rngs(self, env_ids: np.ndarray) -> list[np.random.Generator]:
+        # One stream per (seed, env, episode): resets of some envs never shift others'.
+        return [np.random.default_rng([self.seed, int(i), int(self._episode[i])])
+                for i in env_ids]
+
+    def reset(self, env_ids: torch.Tensor | np.ndarray | list[int] | None = None) -> Obs:
+        """Reset some (default all) environments; return observations of all."""
+        ids = torch.arange(self.num_envs) if env_ids is None else torch.as_tensor(
+            env_ids, dtype=torch.long).reshape(-1).cpu()
+        if len(ids) == 0:
+            return self._observe()
+        if ids.min() < 0 or ids.max() >= self.num_envs:
+            raise IndexError(f"env_ids must lie in [0, {self.num_envs}), got {ids.tolist()}")
+        self.sim.reset(ids)
+        qpos = self._f["qpos"]
+        dev_ids = ids.to(self.device)
+        qpos[dev_ids[:, None], self._home_qadr.to(self.device)] = self._home_qval.to(
+            self.device, qpos.dtype)
+        self._f["ctrl"][dev_ids] = self.home_action.to(qpos.dtype)
+        sample = self.task.sample_reset(self._rngs(ids.numpy()))
+        model = self.scene.model
+        for joint, pose in sample.free_poses.items():
+            adr = model.joint(joint).qposadr[0]
+            qpos[dev_ids, adr:adr + 7] = torch.as_tensor(pose, dtype=qpos.dtype,
+                                                        device=self.device)
+        for joint, value in sample.joint_pos.items():
+            qpos[dev_ids, model.joint(joint).qposadr[0]] = torch.as_tensor(
+                value, dtype=qpos.dtype, device=self.device)
+        if sample.goal is not None:
+            goal = torch.as_tensor(sample.goal, dtype=torch.float64, device=self.device)
+            if self.view.goal is None:
+                self.view.goal = torch.zeros(self.num_envs, goal.shape[1], dtype=goal.dtype,
+                                             device=self.device)
+            self.view.goal[dev_ids] = goal
+        self.sim.forward(ids)
+        for body, initial in self.view.initial_body_pos.items():
+            initial[dev_ids] = self.view.body_pos(body)[dev_ids]
+        self._episode[ids.numpy()] += 1
+        self.steps[dev_ids] = 0
+        self.last_action[dev_ids] = self.home_action.float()
+        return self._observe(reset_ids=dev_ids)
+
+    def _validate(self, actions) -> torch.Tensor:
+        a = torch.as_tensor(actions, device=self.device)
+        if a.shape != (self.num_envs, self.action_dim):
+            raise InvalidActionError(
+                f"actions have shape {tuple(a.shape)}; expected (num_envs, action_dim) = "
+                f"({self.num_envs}, {self.action_dim}) for {self.embodiment.name} "
+                "(layout: env.embodiment.actuators)")
+        if not a.is_floating_point():
+            a = a.double()
+        bad = ~torch.isfinite(a).all(dim=1)
+        if bad.any():
+            raise InvalidActionError(
+                f"actions contain NaN or inf in env(s) {bad.nonzero().flatten().tolist()}; "
+                "nothing was stepped")
+        return torch.clamp(a.double(), self.action_low, self.action_high)
+
+    def step(self, actions) -> tuple[Obs, torch.Tensor, torch.Tensor, torch.Tensor, dict]:
+        """Apply one control step; return (obs, reward, terminated, truncated, info)."""
+        a = self._validate(actions)
+        self._f["ctrl"][:] = a
+        self.last_action = a.float()
+        self.sim.step(self.decimation)
+        self.steps += 1
+        success = self.task.success(self.view)
+        reward = self.task.reward(self.view).float()
+        terminated = success.clone()
+        truncated = self.steps >= self.episode_steps
+        info = {"success": success, "steps": self.steps.clone(),
+                "sim_warnings": self.sim.warning_counts()}
+        done = (terminated | truncated).nonzero().flatten()
+        obs = self.reset(done) if self.auto_reset and len(done) > 0 else self._observe()
+        return obs, reward, terminated, truncated, info
+
+    def _observe(self, reset_ids: torch.Tensor | None = None) -> Obs:
+        out: Obs = {}
+        for group in self.groups:
+            value = self._terms.compute(group, self.last_action)
+            if value is None:
+                continue
+            if self.history:
+                value = self._stack(group, value, reset_ids)
+            out[group] = value
+        return out
+
+    def _stack(self, group: str, value: torch.Tensor, reset_ids: torch.Tensor | None):
+        """Keep the last `history` frames; a reset fills an env's stack with its frame."""
+        buf = self._history.get(group)
+        if buf is None:
+            buf = value[:, None].repeat(1, self.history, *[1] * (value.dim() - 1))
+        elif reset_ids is not None:
+            buf = buf.clone()  # never modify a stack already handed out
+            buf[reset_ids] = value[reset_ids, None]
+        else:
+            buf = torch.cat([buf[:, 1:], value[:, None]], dim=1)
+        self._history[group] = buf
+        return buf

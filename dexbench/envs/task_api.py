@@ -1,0 +1,128 @@
+"""What the environment needs from a task, and the read-only view a task gets back.
+
+A task is (objects, reset distribution, observation terms, success predicate, dense
+reward, horizon). It builds objects through `dexbench.assets` and reads state only
+through `SceneView`, whose accessors return torch tensors on the backend's device, so
+the same predicate runs on the CPU and the GPU backends.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import mujoco
+import numpy as np
+import torch
+
+
+@dataclass
+class ResetSample:
+    """Initial object state for n environments, drawn by a task.
+
+    `free_poses` maps a free joint name to (n, 7) poses (position, quaternion wxyz);
+    `joint_pos` maps a hinge/slide joint name to (n,) values; `goal` is (n, d) or None.
+    """
+
+    free_poses: dict[str, np.ndarray] = field(default_factory=dict)
+    joint_pos: dict[str, np.ndarray] = field(default_factory=dict)
+    goal: np.ndarray | None = None
+
+
+class SceneView:
+    """Named, batched read access to simulator state for tasks and observation terms."""
+
+    def __init__(self, model: mujoco.MjModel, fields: dict[str, torch.Tensor],
+                 fingertip_sites: list[str], palm_sites: list[str]) -> None:
+        self._model = model
+        self._f = fields
+        self._ids: dict[tuple[str, str], int] = {}  # name lookups are slow; cache them
+        self.fingertip_ids = torch.tensor([model.site(s).id for s in fingertip_sites])
+        self.palm_ids = torch.tensor([model.site(s).id for s in palm_sites])
+        self.initial_body_pos: dict[str, torch.Tensor] = {}
+        self.goal: torch.Tensor | None = None
+
+    def body_id(self, name: str) -> int:
+        key = ("body", name)
+        if key not in self._ids:
+            self._ids[key] = self._model.body(name).id
+        return self._ids[key]
+
+    def _qpos_adr(self, joint: str) -> int:
+        key = ("qpos", joint)
+        if key not in self._ids:
+            self._ids[key] = int(self._model.joint(joint).qposadr[0])
+        return self._ids[key]
+
+    def _dof_adr(self, joint: str) -> int:
+        key = ("dof", joint)
+        if key not in self._ids:
+            self._ids[key] = int(self._model.joint(joint).dofadr[0])
+        return self._ids[key]
+
+    def body_pos(self, name: str) -> torch.Tensor:
+        """(N, 3) world position of a body's frame."""
+        return self._f["xpos"][:, self.body_id(name)]
+
+    def body_quat(self, name: str) -> torch.Tensor:
+        """(N, 4) world orientation (w, x, y, z) of a body's frame."""
+        return self._f["xquat"][:, self.body_id(name)]
+
+    def joint_pos(self, name: str) -> torch.Tensor:
+        """(N,) position of a hinge or slide joint."""
+        return self._f["qpos"][:, self._qpos_adr(name)]
+
+    def free_joint_vel(self, name: str) -> torch.Tensor:
+        """(N, 6) linear and angular velocity of a free joint."""
+        adr = self._dof_adr(name)
+        return self._f["qvel"][:, adr : adr + 6]
+
+    def fingertip_pos(self) -> torch.Tensor:
+        """(N, F, 3) fingertip points of every hand, right hand first."""
+        return self._f["site_xpos"][:, self.fingertip_ids]
+
+    def palm_pos(self) -> torch.Tensor:
+        """(N, H, 3) hand-frame origins, right hand first."""
+        return self._f["site_xpos"][:, self.palm_ids]
+
+
+class Task(ABC):
+    """A benchmark task. Subclasses are mostly data plus small predicate functions."""
+
+    name: ClassVar[str]
+    category: ClassVar[str]
+    instruction: ClassVar[str]
+    episode_seconds: ClassVar[float] = 20.0
+    bimanual: ClassVar[bool] = False  # True: needs two hands
+    default_embodiment: ClassVar[str] = "floating_shadow"
+    contact_body: ClassVar[str | None] = None  # fingertip contact forces are vs this body
+    tracked_bodies: ClassVar[tuple[str, ...]] = ()  # bodies whose reset pose is kept
+
+    @abstractmethod
+    def build(self, spec: mujoco.MjSpec) -> None:
+        """Add the task's objects (through `dexbench.assets`) to the scene spec."""
+
+    @abstractmethod
+    def sample_reset(self, rngs: list[np.random.Generator]) -> ResetSample:
+        """Draw initial object states, one generator per environment being reset."""
+
+    @abstractmethod
+    def success(self, view: SceneView) -> torch.Tensor:
+        """(N,) bool: the paper's success condition holds now."""
+
+    @abstractmethod
+    def reward(self, view: SceneView) -> torch.Tensor:
+        """(N,) float dense reward for RL."""
+
+    def state_obs(self, view: SceneView) -> torch.Tensor | None:
+        """(N, d) observable task state, or None."""
+        return None
+
+    def goal_obs(self, view: SceneView) -> torch.Tensor | None:
+        """(N, d) commanded target, or None for tasks without a goal."""
+        return None
+
+    def privileged_obs(self, view: SceneView) -> torch.Tensor | None:
+        """(N, d) task quantities withheld from policies (object velocities, ...)."""
+        return None

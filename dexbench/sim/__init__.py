@@ -1,0 +1,1 @@
+"""Physics backends behind one batched interface (see `backend.SimBackend`)."""

@@ -1,0 +1,1 @@
+"""Benchmark tasks, one module per category; `registry` finds them by name."""

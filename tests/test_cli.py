@@ -1,0 +1,62 @@
+"""Command-line contracts: list, inspect, bench, and one-line errors."""
+
+import json
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+from dexbench.cli.bench import bench_sim
+from dexbench.cli.config import ConfigError, load_config
+from dexbench.embodiments.builder import embodiment_names
+
+
+def _run(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, timeout=300)
+
+
+def test_list_tasks_and_embodiments():
+    tasks = _run("-m", "dexbench", "list", "tasks")
+    assert tasks.returncode == 0
+    assert [line.split()[0] for line in tasks.stdout.splitlines()] == ["PickCube"]
+    embodiments = _run("-m", "dexbench", "list", "embodiments")
+    names = [line.split()[0] for line in embodiments.stdout.splitlines()]
+    assert names == embodiment_names() and len(names) == 48
+
+
+def test_inspect_prints_one_json_object():
+    out = _run("-m", "dexbench", "inspect", "task=PickCube", "embodiment=fr3_allegro")
+    assert out.returncode == 0, out.stderr
+    info = json.loads(out.stdout)
+    assert info["action_dim"] == len(info["actuators"]) == 7 + 16
+    assert info["obs"]["proprio"] == [23] and info["obs"]["state"] == [7]
+    assert info["control_dt"] == pytest.approx(1 / 60)
+    assert info["episode_steps"] == 1200
+
+
+@pytest.mark.parametrize("arg, needle", [
+    ("task=Nope", "unknown task 'Nope'"),
+    ("embodiment=floating_claw", "unknown embodiment"),
+    ("nosuchkey=1", "nosuchkey"),
+])
+def test_bad_input_gives_one_line_error(arg, needle):
+    out = _run("-m", "dexbench", "inspect", arg)
+    assert out.returncode == 2
+    assert needle in out.stderr and "Traceback" not in out.stderr
+    assert out.stderr.strip().count("\n") == 0
+
+
+def test_config_rejects_positional_arguments():
+    with pytest.raises(ConfigError, match="key=value"):
+        load_config("config", ["PickCube"])
+
+
+def test_bench_sim_reports_throughput_and_writes_run_dir():
+    result = bench_sim(["num_envs=4", "steps=5", "warmup=1"])
+    for key in ("env_steps_per_s", "raw_physics_steps_per_s", "decimation", "ratio"):
+        assert result[key] > 0
+    assert result["decimation"] == 4
+    run_dir = pathlib.Path(result["run_dir"])
+    assert json.loads((run_dir / "metrics.json").read_text())["ratio"] == result["ratio"]
+    assert (run_dir / "config.yaml").exists()
