@@ -15,6 +15,7 @@ from dexbench.envs.arena import PhysicsOptions
 from dexbench.envs.observations import ObservationTerms, resolve_groups
 from dexbench.envs.scene import compose_scene
 from dexbench.envs.task_api import SceneView, Task
+from dexbench.sim.backend import DERIVED_FIELDS, STATE_FIELDS
 from dexbench.sim.factory import make_backend
 
 Obs = dict[str, torch.Tensor]
@@ -60,12 +61,11 @@ class DexEnv:
         model = self.scene.model
         self.sim = make_backend(backend, model, num_envs, nthread)
         self.device = self.sim.device
-        fields = {n: self.sim.field(n) for n in ("qpos", "qvel", "ctrl", "xpos", "xquat",
-                                                  "site_xpos", "sensordata")}
+        fields = {n: self.sim.field(n) for n in (*STATE_FIELDS, *DERIVED_FIELDS)}
         self._f = fields
         sites = [s for side in self.embodiment.sides.values() for s in side.fingertip_sites]
         palms = [side.palm_site for side in self.embodiment.sides.values()]
-        self.view = SceneView(model, fields, sites, palms)
+        self.view = SceneView(model, fields, sites, palms, self.scene.hand_geoms)
         self.groups, self.history = resolve_groups(obs)
         if history is not None:
             self.history = history
@@ -124,6 +124,11 @@ class DexEnv:
             adr = model.joint(joint).qposadr[0]
             qpos[dev_ids, adr:adr + 7] = torch.as_tensor(pose, dtype=qpos.dtype,
                                                         device=self.device)
+        for body, pose in sample.mocap_poses.items():
+            mocap = int(model.body(body).mocapid[0])
+            pose = torch.as_tensor(pose, dtype=qpos.dtype, device=self.device)
+            self._f["mocap_pos"][dev_ids, mocap] = pose[:, :3]
+            self._f["mocap_quat"][dev_ids, mocap] = pose[:, 3:]
         for joint, value in sample.joint_pos.items():
             qpos[dev_ids, model.joint(joint).qposadr[0]] = torch.as_tensor(
                 value, dtype=qpos.dtype, device=self.device)
@@ -164,6 +169,7 @@ class DexEnv:
         self.last_action = a.float()
         self.sim.step(self.decimation)
         self.steps += 1
+        self.task.update(self.view)
         success = self.task.success(self.view)
         reward = self.task.reward(self.view).float()
         terminated = success.clone()

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import torch
 
+from dexbench.envs.rotations import quat_apply_inverse
 from dexbench.envs.scene import CONTACT_FORCE_CLIP, Scene
 from dexbench.envs.task_api import SceneView, Task
 
@@ -59,13 +60,6 @@ def resolve_groups(obs: str | tuple[str, ...] | list[str]) -> tuple[tuple[str, .
     return groups, history
 
 
-def quat_rotate_inverse(quat: torch.Tensor, vec: torch.Tensor) -> torch.Tensor:
-    """Rotate vectors (..., 3) by the inverse of unit quaternions (..., 4) wxyz."""
-    w, xyz = quat[..., :1], -quat[..., 1:]
-    t = 2.0 * torch.cross(xyz, vec, dim=-1)
-    return vec + w * t + torch.cross(xyz, t, dim=-1)
-
-
 class ObservationTerms:
     """Computes each group from the scene view; indices are resolved once."""
 
@@ -103,7 +97,7 @@ class ObservationTerms:
                 return None
             forces = f["sensordata"][:, self._contact_adr].reshape(len(last_action), -1, 3)
             base_quat = f["xquat"][:, self._contact_base]
-            out = quat_rotate_inverse(base_quat, forces).clamp(
+            out = quat_apply_inverse(base_quat, forces).clamp(
                 -CONTACT_FORCE_CLIP, CONTACT_FORCE_CLIP).flatten(1)
         elif group == "state":
             out = self._task.state_obs(view)

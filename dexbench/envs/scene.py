@@ -27,6 +27,7 @@ class Scene:
     options: PhysicsOptions
     contact_sensors: tuple[str, ...]  # one per fingertip, right hand first
     link_sites: tuple[str, ...]  # palm and fingertip sites with pose/velocity sensors
+    hand_geoms: tuple[int, ...]  # collision geoms of every hand link
 
 
 def _link_sensors(spec: mujoco.MjSpec, site: str) -> None:
@@ -57,6 +58,7 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions) -> Scene
     spec = build_arena(options)
     plan = add_embodiment(spec, embodiment)
     task.build(spec)
+    spec.nuserdata = task.memory_size
     sides = plan.sides.values()
     link_sites = tuple(s for side in sides for s in (side.palm_site, *side.fingertip_sites))
     for site in link_sites:
@@ -66,4 +68,10 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions) -> Scene
         contacts = tuple(_contact_sensor(spec, task.contact_body, tip)
                          for side in sides for tip in side.fingertip_bodies)
     model = spec.compile()
-    return Scene(model, Embodiment.resolve(plan, model), options, contacts, link_sites)
+    prefixes = tuple(f"{side}/hand/" for side in plan.sides)
+    hand_geoms = tuple(
+        g for g in range(model.ngeom)
+        if model.body(model.geom_bodyid[g]).name.startswith(prefixes)
+        and (model.geom_contype[g] or model.geom_conaffinity[g]))
+    return Scene(model, Embodiment.resolve(plan, model), options, contacts, link_sites,
+                 hand_geoms)

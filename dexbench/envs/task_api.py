@@ -16,16 +16,20 @@ import mujoco
 import numpy as np
 import torch
 
+from dexbench.envs.rotations import quat_apply
+
 
 @dataclass
 class ResetSample:
     """Initial object state for n environments, drawn by a task.
 
     `free_poses` maps a free joint name to (n, 7) poses (position, quaternion wxyz);
-    `joint_pos` maps a hinge/slide joint name to (n,) values; `goal` is (n, d) or None.
+    `mocap_poses` maps a mocap body (fixed objects) to (n, 7) poses; `joint_pos` maps a
+    hinge/slide joint name to (n,) values; `goal` is (n, d) or None.
     """
 
     free_poses: dict[str, np.ndarray] = field(default_factory=dict)
+    mocap_poses: dict[str, np.ndarray] = field(default_factory=dict)
     joint_pos: dict[str, np.ndarray] = field(default_factory=dict)
     goal: np.ndarray | None = None
 
@@ -34,9 +38,15 @@ class SceneView:
     """Named, batched read access to simulator state for tasks and observation terms."""
 
     def __init__(self, model: mujoco.MjModel, fields: dict[str, torch.Tensor],
-                 fingertip_sites: list[str], palm_sites: list[str]) -> None:
+                 fingertip_sites: list[str], palm_sites: list[str],
+                 hand_geoms: list[int]) -> None:
         self._model = model
         self._f = fields
+        device = fields["xpos"].device
+        self.hand_geom_ids = torch.tensor(hand_geoms, dtype=torch.long, device=device)
+        # A hand geom's thickness: its smallest bounding-box half-extent.
+        self.hand_geom_thickness = torch.as_tensor(
+            model.geom_aabb[hand_geoms, 3:].min(axis=1), device=device)
         self._ids: dict[tuple[str, str], int] = {}  # name lookups are slow; cache them
         self.fingertip_ids = torch.tensor([model.site(s).id for s in fingertip_sites])
         self.palm_ids = torch.tensor([model.site(s).id for s in palm_sites])
@@ -78,6 +88,30 @@ class SceneView:
         adr = self._dof_adr(name)
         return self._f["qvel"][:, adr : adr + 6]
 
+    @property
+    def memory(self) -> torch.Tensor:
+        """(N, memory_size) task memory kept in the simulator state (zero at reset).
+
+        It lives in MuJoCo's `userdata`, part of the full physics state, so restoring a
+        recorded state restores e.g. the stages a long-horizon task has completed.
+        """
+        return self._f["userdata"]
+
+    def point_pos(self, body: str, local: tuple[float, float, float]) -> torch.Tensor:
+        """(N, 3) world position of a point fixed in a body's frame."""
+        offset = torch.as_tensor(local, dtype=self._f["xpos"].dtype, device=self._f["xpos"].device)
+        return self.body_pos(body) + quat_apply(self.body_quat(body), offset.expand(
+            self.body_pos(body).shape))
+
+    def axis(self, body: str, local: tuple[float, float, float]) -> torch.Tensor:
+        """(N, 3) world direction of an axis fixed in a body's frame."""
+        vec = torch.as_tensor(local, dtype=self._f["xpos"].dtype, device=self._f["xpos"].device)
+        return quat_apply(self.body_quat(body), vec.expand(self.body_pos(body).shape))
+
+    def hand_geom_pos(self) -> torch.Tensor:
+        """(N, G, 3) centres of every collision geom of every hand."""
+        return self._f["geom_xpos"][:, self.hand_geom_ids]
+
     def fingertip_pos(self) -> torch.Tensor:
         """(N, F, 3) fingertip points of every hand, right hand first."""
         return self._f["site_xpos"][:, self.fingertip_ids]
@@ -92,12 +126,15 @@ class Task(ABC):
 
     name: ClassVar[str]
     category: ClassVar[str]
-    instruction: ClassVar[str]
+    instruction: ClassVar[str]  # language instruction for VLAs and datasets
+    description: ClassVar[str] = ""  # the paper's task description
+    success_text: ClassVar[str] = ""  # the paper's success condition, in words
     episode_seconds: ClassVar[float] = 20.0
     bimanual: ClassVar[bool] = False  # True: needs two hands
     default_embodiment: ClassVar[str] = "floating_shadow"
     contact_body: ClassVar[str | None] = None  # fingertip contact forces are vs this body
     tracked_bodies: ClassVar[tuple[str, ...]] = ()  # bodies whose reset pose is kept
+    memory_size: ClassVar[int] = 0  # floats of per-env memory (`SceneView.memory`)
 
     @abstractmethod
     def build(self, spec: mujoco.MjSpec) -> None:
@@ -106,6 +143,9 @@ class Task(ABC):
     @abstractmethod
     def sample_reset(self, rngs: list[np.random.Generator]) -> ResetSample:
         """Draw initial object states, one generator per environment being reset."""
+
+    def update(self, view: SceneView) -> None:
+        """Advance task memory after each control step (stage latches); no-op by default."""
 
     @abstractmethod
     def success(self, view: SceneView) -> torch.Tensor:

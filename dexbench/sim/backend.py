@@ -1,9 +1,8 @@
 """The batched simulator interface every backend implements.
 
 Fields are exposed as live torch tensors shaped (num_envs, ...): state fields
-(`qpos`, `qvel`, `ctrl`) are writable views of the simulator state; derived fields
-(`xpos`, `xquat`, `site_xpos`, `site_xmat`, `sensordata`) are current after `step`
-and `forward`. Upper layers never see the backend's own arrays, so observation terms,
+(`STATE_FIELDS`) are writable views of the simulator state; derived fields
+(`DERIVED_FIELDS`) are current after `step` and `forward`. Upper layers never see the backend's own arrays, so observation terms,
 rewards and success predicates run unchanged on CPU (numpy-backed) and GPU tensors.
 """
 
@@ -14,8 +13,8 @@ from typing import Protocol
 import mujoco
 import torch
 
-STATE_FIELDS = ("qpos", "qvel", "ctrl")
-DERIVED_FIELDS = ("xpos", "xquat", "site_xpos", "site_xmat", "sensordata")
+STATE_FIELDS = ("qpos", "qvel", "ctrl", "mocap_pos", "mocap_quat", "userdata")
+DERIVED_FIELDS = ("xpos", "xquat", "geom_xpos", "site_xpos", "site_xmat", "sensordata")
 
 
 class SimBackend(Protocol):
