@@ -9,7 +9,9 @@ import pytest
 
 from dexbench.cli.bench import bench_sim
 from dexbench.cli.config import ConfigError, load_config
+from dexbench.cli.introspect import inspect
 from dexbench.embodiments.builder import embodiment_names
+from dexbench.tasks.registry import TASKS
 
 
 def _run(*args: str) -> subprocess.CompletedProcess:
@@ -19,7 +21,9 @@ def _run(*args: str) -> subprocess.CompletedProcess:
 def test_list_tasks_and_embodiments():
     tasks = _run("-m", "dexbench", "list", "tasks")
     assert tasks.returncode == 0
-    assert [line.split()[0] for line in tasks.stdout.splitlines()] == ["PickCube"]
+    rows = [line.split() for line in tasks.stdout.splitlines()]
+    assert sorted(r[0] for r in rows) == sorted(TASKS) and len(rows) == 17
+    assert {r[0]: r[1] for r in rows}["PushT"] == "nonprehensile"
     embodiments = _run("-m", "dexbench", "list", "embodiments")
     names = [line.split()[0] for line in embodiments.stdout.splitlines()]
     assert names == embodiment_names() and len(names) == 48
@@ -33,6 +37,14 @@ def test_inspect_prints_one_json_object():
     assert info["obs"]["proprio"] == [23] and info["obs"]["state"] == [7]
     assert info["control_dt"] == pytest.approx(1 / 60)
     assert info["episode_steps"] == 1200
+
+
+@pytest.mark.parametrize("task", sorted(TASKS))
+def test_inspect_works_for_every_task(task):
+    info = json.loads(inspect([f"task={task}"]))
+    assert info["task"] == task and info["action_dim"] == len(info["actuators"])
+    assert info["episode_steps"] == round(TASKS[task].episode_seconds * 60)
+    assert "state" in info["obs"] and "privileged" not in info["obs"]
 
 
 @pytest.mark.parametrize("arg, needle", [

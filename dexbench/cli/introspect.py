@@ -6,13 +6,15 @@ import json
 import sys
 
 from dexbench.cli.config import env_kwargs, load_config
+from dexbench.cli.docs import write_docs
 from dexbench.embodiments.builder import embodiment_names, parse_embodiment
 from dexbench.tasks.registry import TASKS, make_env
 
 USAGE = """usage:
   python -m dexbench list tasks
   python -m dexbench list embodiments
-  python -m dexbench inspect task=<Task> embodiment=<embodiment> [obs=<preset>]"""
+  python -m dexbench inspect task=<Task> embodiment=<embodiment> [obs=<preset>]
+  python -m dexbench docs             (regenerates docs/tasks.md)"""
 
 
 def list_tasks() -> str:
@@ -61,6 +63,8 @@ def main(argv: list[str]) -> int:
         print(list_embodiments())
     elif argv[:1] == ["inspect"]:
         print(inspect(argv[1:]))
+    elif argv == ["docs"]:
+        print(f"wrote {write_docs()}")
     else:
         print(USAGE, file=sys.stderr)
         return 2

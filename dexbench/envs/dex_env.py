@@ -82,6 +82,7 @@ class DexEnv:
         self.steps = torch.zeros(num_envs, dtype=torch.long, device=self.device)
         self.last_action = self.home_action.repeat(num_envs, 1).float()
         self._history: Obs = {}
+        self._was_reset = False
         for body in task.tracked_bodies:
             self.view.initial_body_pos[body] = torch.zeros(num_envs, 3, dtype=torch.float64,
                                                            device=self.device)
@@ -92,7 +93,8 @@ class DexEnv:
 
     def obs_shapes(self) -> dict[str, tuple[int, ...]]:
         """Shape of each group one environment returns (no batch axis)."""
-        return {k: tuple(v.shape[1:]) for k, v in self._observe().items()}
+        obs = self._observe() if self._was_reset else self.reset()
+        return {k: tuple(v.shape[1:]) for k, v in obs.items()}
 
     def reseed(self, seed: int) -> None:
         """Restart every environment's reset stream from `seed` (takes effect at reset)."""
@@ -142,6 +144,7 @@ class DexEnv:
         for body, initial in self.view.initial_body_pos.items():
             initial[dev_ids] = self.view.body_pos(body)[dev_ids]
         self._episode[ids.numpy()] += 1
+        self._was_reset = True
         self.steps[dev_ids] = 0
         self.last_action[dev_ids] = self.home_action.float()
         return self._observe(reset_ids=dev_ids)
@@ -164,6 +167,8 @@ class DexEnv:
 
     def step(self, actions) -> tuple[Obs, torch.Tensor, torch.Tensor, torch.Tensor, dict]:
         """Apply one control step; return (obs, reward, terminated, truncated, info)."""
+        if not self._was_reset:
+            raise RuntimeError("call reset() before the first step()")
         a = self._validate(actions)
         self._f["ctrl"][:] = a
         self.last_action = a.float()

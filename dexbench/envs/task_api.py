@@ -144,7 +144,7 @@ class Task(ABC):
     def sample_reset(self, rngs: list[np.random.Generator]) -> ResetSample:
         """Draw initial object states, one generator per environment being reset."""
 
-    def update(self, view: SceneView) -> None:
+    def update(self, view: SceneView) -> None:  # noqa: B027  (optional hook)
         """Advance task memory after each control step (stage latches); no-op by default."""
 
     @abstractmethod

@@ -2,8 +2,9 @@
 
 Fields are exposed as live torch tensors shaped (num_envs, ...): state fields
 (`STATE_FIELDS`) are writable views of the simulator state; derived fields
-(`DERIVED_FIELDS`) are current after `step` and `forward`. Upper layers never see the backend's own arrays, so observation terms,
-rewards and success predicates run unchanged on CPU (numpy-backed) and GPU tensors.
+(`DERIVED_FIELDS`) are current after `step` and `forward`. Upper layers never see the
+backend's own arrays, so observation terms, rewards and success predicates run
+unchanged on CPU (numpy-backed) and GPU tensors.
 """
 
 from __future__ import annotations

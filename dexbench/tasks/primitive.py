@@ -1,65 +1,282 @@
-"""Primitive skills: grasp, lift, place, press, turn."""
+"""Primitive skills: grasp, lift, place, press, turn (paper appendix, "Primitive")."""
 
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import mujoco
 import numpy as np
 import torch
 
-from dexbench.assets.objects import add_free_box
-from dexbench.embodiments.builder import TABLE_TOP_Z
-from dexbench.envs.task_api import ResetSample, SceneView, Task
+from dexbench.assets import articulated, objects, procedural
+from dexbench.assets.objects import ObjectInfo, add_free_box
+from dexbench.envs.task_api import SceneView
+from dexbench.tasks.predicates import dist, progress, tilt_deg, xy_dist
+from dexbench.tasks.templates import Placement, TabletopTask, uniform_points
+
+CENTRE = Placement(x=(-0.10, 0.10), y=(-0.15, 0.15))
 
 
-def yaw_quat(yaw: np.ndarray) -> np.ndarray:
-    """(n, 4) quaternions (w, x, y, z) of rotations about world z."""
-    return np.stack([np.cos(yaw / 2), 0 * yaw, 0 * yaw, np.sin(yaw / 2)], axis=-1)
-
-
-class PickCube(Task):
-    """Grasp a cube on the tabletop and lift it at least 0.20 m above its reset height."""
-
+class PickCube(TabletopTask):
     name = "PickCube"
     category = "primitive"
     instruction = "Pick up the cube and lift it above the table."
-    episode_seconds = 20.0
-    contact_body = "cube"
-    tracked_bodies = ("cube",)
-
+    description = "Grasp a cube on the tabletop and lift it away from the surface."
+    success_text = "The cube is lifted at least 0.20 m above its resetting height."
+    placements: ClassVar = {"cube": CENTRE}
     lift_threshold = 0.20
-    half_size = 0.025
-    mass = 0.1
-    x_range = (-0.10, 0.10)
-    y_range = (-0.15, 0.15)
 
-    def build(self, spec: mujoco.MjSpec) -> None:
-        add_free_box(spec, "cube", [self.half_size] * 3, self.mass)
-
-    def sample_reset(self, rngs: list[np.random.Generator]) -> ResetSample:
-        xy = np.array([[r.uniform(*self.x_range), r.uniform(*self.y_range)] for r in rngs])
-        yaw = np.array([r.uniform(-math.pi, math.pi) for r in rngs])
-        z = np.full((len(rngs), 1), TABLE_TOP_Z + self.half_size)
-        pose = np.concatenate([xy, z, yaw_quat(yaw)], axis=1)
-        return ResetSample(free_poses={"cube/free": pose})
-
-    def lift(self, view: SceneView) -> torch.Tensor:
-        return view.body_pos("cube")[:, 2] - view.initial_body_pos["cube"][:, 2]
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"cube": add_free_box(spec, "cube", [0.025] * 3, 0.1)}
 
     def success(self, view: SceneView) -> torch.Tensor:
-        return self.lift(view) >= self.lift_threshold
+        return self.lift(view, "cube") >= self.lift_threshold
 
-    def reward(self, view: SceneView) -> torch.Tensor:
-        cube = view.body_pos("cube")
-        tip_dist = (view.fingertip_pos() - cube[:, None]).norm(dim=-1).mean(dim=1)
-        reach = torch.exp(-10.0 * tip_dist)
-        progress = (self.lift(view) / self.lift_threshold).clamp(0.0, 1.0)
-        grasping = (tip_dist < 0.08).to(reach.dtype)
-        return 2.0 * reach + 2.0 * grasping * progress + 8.0 * self.success(view).to(reach.dtype)
+    def progress(self, view: SceneView) -> torch.Tensor:
+        return self.lift(view, "cube") / self.lift_threshold
 
-    def state_obs(self, view: SceneView) -> torch.Tensor:
-        return torch.cat([view.body_pos("cube"), view.body_quat("cube")], dim=1)
 
-    def privileged_obs(self, view: SceneView) -> torch.Tensor:
-        return view.free_joint_vel("cube/free")
+class StackCube(TabletopTask):
+    name = "StackCube"
+    category = "primitive"
+    instruction = "Stack the red cube on top of the green cube."
+    description = "Pick and place one cube on top of another cube to form a stable stack."
+    success_text = ("The moving cube is stabilized within 0.035 m horizontally and 0.025 m "
+                    "vertically of resting directly on top of the base cube.")
+    placements: ClassVar = {"cube": CENTRE, "base_cube": Placement((-0.10, 0.10),
+                                                                   (-0.20, 0.20), clearance=0.05)}
+    half = 0.025
+    xy_tol, z_tol, max_speed = 0.035, 0.025, 0.05
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"cube": add_free_box(spec, "cube", [self.half] * 3, 0.1),
+                "base_cube": add_free_box(spec, "base_cube", [self.half] * 3, 0.1,
+                                          rgba=(0.2, 0.7, 0.3, 1.0))}
+
+    def _offset(self, view: SceneView) -> torch.Tensor:
+        return view.body_pos("cube") - view.body_pos("base_cube")
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        off = self._offset(view)
+        still = view.free_joint_vel(self.objects["cube"].free_joint)[:, :3].norm(dim=1)
+        return ((off[:, :2].norm(dim=1) <= self.xy_tol)
+                & ((off[:, 2] - 2 * self.half).abs() <= self.z_tol)
+                & (still <= self.max_speed))
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        off = self._offset(view)
+        off[:, 2] -= 2 * self.half
+        return 1.0 - off.norm(dim=1) / 0.3
+
+    def focus(self, view: SceneView) -> torch.Tensor:
+        return view.body_pos("cube")
+
+
+class RelocateSphere(TabletopTask):
+    name = "RelocateSphere"
+    category = "primitive"
+    instruction = "Move the ball to the target."
+    description = ("Move a sphere from its initial tabletop position to the commanded "
+                   "target location.")
+    success_text = "The sphere comes within 0.03 m of a goal point sampled once per episode."
+    placements: ClassVar = {"sphere": CENTRE}
+    goal_marker = "goal"
+    tolerance = 0.03
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"sphere": objects.add_sphere(spec, "sphere", radius=0.03, mass=0.1),
+                "goal": objects.add_goal_marker(spec, "goal", radius=self.tolerance)}
+
+    def sample_goal(self, rngs: list[np.random.Generator]) -> np.ndarray:
+        return uniform_points(rngs, (-0.15, 0.15), (-0.20, 0.20), (0.05, 0.20))
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        return dist(view.body_pos("sphere"), view.goal) <= self.tolerance
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        return 1.0 - dist(view.body_pos("sphere"), view.goal) / 0.4
+
+
+class PickUpStick(TabletopTask):
+    name = "PickUpStick"
+    category = "primitive"
+    instruction = "Pick up the stick and keep it upright."
+    description = ("Grasp a stick on the tabletop and lift it while maintaining an upright "
+                   "orientation.")
+    success_text = ("The stick is lifted at least 0.20 m above its reset height and stays "
+                    "within 30° of vertical.")
+    placements: ClassVar = {"stick": CENTRE}
+    lift_threshold, max_tilt = 0.20, 30.0
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"stick": objects.add_stick(spec, "stick")}
+
+    def _tilt(self, view: SceneView) -> torch.Tensor:
+        body, axis = self.objects["stick"].axes["up"]
+        return tilt_deg(view.axis(body, axis))
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        return (self.lift(view, "stick") >= self.lift_threshold) & (
+            self._tilt(view) <= self.max_tilt)
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        upright = (self._tilt(view) <= self.max_tilt).to(torch.float64)
+        return upright * self.lift(view, "stick") / self.lift_threshold
+
+
+class RelocateObject(TabletopTask):
+    name = "RelocateObject"
+    category = "primitive"
+    instruction = "Move the bottle to the target point above the table."
+    description = ("Move a rigid object from the tabletop reset region to a sampled 3D goal "
+                   "position above the table.")
+    success_text = ("The object is moved to within 0.03 m of a sampled goal point, roughly "
+                    "within 0.2 m of table center and 0.15-0.25 m above the table.")
+    placements: ClassVar = {"bottle": CENTRE}
+    goal_marker = "goal"
+    tolerance = 0.03
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"bottle": procedural.add_bottle(spec, "bottle"),
+                "goal": objects.add_goal_marker(spec, "goal", radius=self.tolerance)}
+
+    def sample_goal(self, rngs: list[np.random.Generator]) -> np.ndarray:
+        out = []
+        for r in rngs:
+            radius, angle = 0.2 * math.sqrt(r.uniform()), r.uniform(-math.pi, math.pi)
+            out.append([radius * math.cos(angle), radius * math.sin(angle), 0.0])
+        pts = np.array(out)
+        pts[:, 2] = uniform_points(rngs, (0, 0), (0, 0), (0.15, 0.25))[:, 2]
+        return pts
+
+    def _centre(self, view: SceneView) -> torch.Tensor:
+        body, pos = self.objects["bottle"].points["centre"]
+        return view.point_pos(body, pos)
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        return dist(self._centre(view), view.goal) <= self.tolerance
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        return 1.0 - dist(self._centre(view), view.goal) / 0.4
+
+
+class _Articulated(TabletopTask):
+    """One articulated object; success when its joint covers `threshold` of its travel."""
+
+    joint: ClassVar[str]
+    threshold: ClassVar[float]
+
+    def _progress(self, view: SceneView) -> torch.Tensor:
+        lo, hi = self.joint_range(self.joint)
+        return progress(view.joint_pos(self.joint), self.initial_joints[self.joint], lo, hi)
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        return self._progress(view) >= self.threshold
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        return self._progress(view) / self.threshold
+
+
+class TurnOnSwitch(_Articulated):
+    name = "TurnOnSwitch"
+    category = "primitive"
+    instruction = "Turn on the switch."
+    description = "Flip an articulated switch from the off state toward the on state."
+    success_text = "The switch moves at least 80% of its reachable travel from its reset position."
+    placements: ClassVar = {"switch": Placement((0.0, 0.15), (-0.15, 0.15), (-0.3, 0.3))}
+    joint = "switch/rocker"
+    threshold = 0.8
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        info = articulated.add_switch(spec, "switch")
+        self.initial_joints = {self.joint: info.joints[self.joint][0]}
+        return {"switch": info}
+
+
+class PushButton(_Articulated):
+    name = "PushButton"
+    category = "primitive"
+    instruction = "Press the button."
+    description = "Move the fingertip or hand into an articulated button and press it down."
+    success_text = "The button is pressed at least 80% of its roughly 0.015 m travel."
+    placements: ClassVar = {"button": Placement((-0.05, 0.15), (-0.15, 0.15))}
+    joint = "button/press"
+    threshold = 0.8
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        info = articulated.add_button(spec, "button")
+        self.initial_joints = {self.joint: 0.0}
+        return {"button": info}
+
+
+class OpenFaucet(_Articulated):
+    name = "OpenFaucet"
+    category = "primitive"
+    instruction = "Turn the faucet handle to open the faucet."
+    description = ("Turn an articulated faucet handle from its initial pose toward the target "
+                   "turned state.")
+    success_text = "The handle is turned at least 80° from its reset angle."
+    placements: ClassVar = {"faucet": Placement((0.3, 0.5), (-0.2, 0.2), (math.pi - 0.3,
+                                                                           math.pi + 0.3))}
+    joint = "faucet/handle"
+    turn_deg = 80.0
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        info = articulated.add_faucet(spec, "faucet")
+        self.initial_joints = {self.joint: info.joints[self.joint][0]}
+        return {"faucet": info}
+
+    def _turned(self, view: SceneView) -> torch.Tensor:
+        return torch.rad2deg((view.joint_pos(self.joint) - self.initial_joints[self.joint]).abs())
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        return self._turned(view) >= self.turn_deg
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        return self._turned(view) / self.turn_deg
+
+
+class GraspTwoItems(TabletopTask):
+    """Five candidate shapes exist; each episode two are on the table, three parked."""
+
+    name = "GraspTwoItems"
+    category = "primitive"
+    instruction = "Pick up both objects on the table at the same time."
+    description = ("Randomly select two primitive objects from the candidate set and lift "
+                   "both selected objects.")
+    success_text = ("Both of the two randomly selected primitive shapes, out of 5 candidates, "
+                    "are lifted at least 0.20 m above the tabletop at the same time.")
+    candidates = ("box", "ball", "cylinder", "capsule", "prism")
+    placements: ClassVar = {n: Placement((-0.15, 0.15), (-0.25, 0.25)) for n in candidates}
+    lift_threshold = 0.20
+    parking_x = 1.5  # unselected shapes rest on the floor, out of reach, off camera
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return objects.add_primitive_set(spec, self.candidates)
+
+    def sample_reset(self, rngs: list[np.random.Generator]):
+        sample = super().sample_reset(rngs)
+        for env, rng in enumerate(rngs):
+            chosen = set(rng.choice(len(self.candidates), size=2, replace=False).tolist())
+            for k, name in enumerate(self.candidates):
+                if k not in chosen:
+                    pose = sample.free_poses[self.objects[name].free_joint][env]
+                    pose[:3] = [self.parking_x + 0.2 * k, 0.0, self.objects[name].rest_height]
+        return sample
+
+    def _lifts(self, view: SceneView) -> torch.Tensor:
+        return torch.stack([self.lift(view, n) for n in self.candidates], dim=1)
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        return (self._lifts(view) >= self.lift_threshold).sum(dim=1) >= 2
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        top2 = self._lifts(view).topk(2, dim=1).values.clamp(0.0, self.lift_threshold)
+        return top2.sum(dim=1) / (2 * self.lift_threshold)
+
+    def focus(self, view: SceneView) -> torch.Tensor:
+        pos = torch.stack([view.body_pos(self.objects[n].root) for n in self.candidates], 1)
+        near = xy_dist(pos.flatten(0, 1), torch.zeros_like(pos.flatten(0, 1))).view(
+            pos.shape[:2]).argmin(dim=1)
+        return pos[torch.arange(len(pos)), near]

@@ -7,9 +7,30 @@ import gymnasium as gym
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.gym_env import DexGymEnv
 from dexbench.envs.task_api import Task
-from dexbench.tasks.primitive import PickCube
+from dexbench.tasks import (
+    articulation,
+    bimanual,
+    contact_rich,
+    functional,
+    longhorizon,
+    multigoal,
+    nonprehensile,
+    primitive,
+)
 
-TASKS: dict[str, type[Task]] = {t.name: t for t in (PickCube,)}
+TASK_CLASSES: tuple[type[Task], ...] = (
+    primitive.PickCube, primitive.StackCube, primitive.RelocateSphere, primitive.PickUpStick,
+    primitive.RelocateObject, primitive.TurnOnSwitch, primitive.PushButton,
+    primitive.OpenFaucet, primitive.GraspTwoItems,
+    functional.FunctionalPourMug,
+    articulation.OpenDrawer, articulation.OpenLaptop,
+    nonprehensile.PushT,
+    contact_rich.InsertPeg,
+    bimanual.BimanualLiftTray,
+    multigoal.OpenDrawerRelocateSphere,
+    longhorizon.MakeCoffee,
+)
+TASKS: dict[str, type[Task]] = {t.name: t for t in TASK_CLASSES}
 
 
 class UnknownTaskError(ValueError):

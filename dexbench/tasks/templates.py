@@ -58,6 +58,7 @@ class TabletopTask(Task):
 
     placements: ClassVar[dict[str, Placement]] = {}
     initial_joints: ClassVar[dict[str, float]] = {}
+    goal_marker: ClassVar[str | None] = None  # visual-only object shown at the goal point
     reach_weight: ClassVar[float] = 2.0
     progress_weight: ClassVar[float] = 4.0
     success_bonus: ClassVar[float] = 8.0
@@ -119,6 +120,10 @@ class TabletopTask(Task):
                 sample.free_poses[info.free_joint] = poses
             elif info.mocap:
                 sample.mocap_poses[info.root] = poses
+        if self.goal_marker is not None and sample.goal is not None:
+            marker = np.zeros((len(rngs), 7))
+            marker[:, :3], marker[:, 3] = sample.goal[:, :3], 1.0
+            sample.mocap_poses[self.objects[self.goal_marker].root] = marker
         n = len(rngs)
         sample.joint_pos.update({j: np.full(n, q) for j, q in self.initial_joints.items()})
         return sample
@@ -178,12 +183,16 @@ class MultiGoalTask(TabletopTask):
     primary_cls: ClassVar[type[TabletopTask]]
     addon_cls: ClassVar[type[TabletopTask]]
     addon_object: ClassVar[str]
+    addon_placement: ClassVar[Placement | None] = None  # where the add-on fits beside it
 
     def __init__(self) -> None:
         super().__init__()
         self.primary = self.primary_cls()
         self.addon = self.addon_cls()
-        self.placements = {**self.primary.placements, **self.addon.placements}
+        addon = dict(self.addon.placements)
+        if self.addon_placement is not None:
+            addon[self.addon_object] = self.addon_placement
+        self.placements = {**self.primary.placements, **addon}
         self.initial_joints = {**self.primary.initial_joints, **self.addon.initial_joints}
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
@@ -243,3 +252,10 @@ class StageTask(TabletopTask):
     def state_obs(self, view: SceneView) -> torch.Tensor:
         stage = self.progress(view).to(view.memory.dtype)[:, None]
         return torch.cat([super().state_obs(view), stage], dim=1)
+
+
+def uniform_points(rngs: list[np.random.Generator], x: tuple[float, float],
+                   y: tuple[float, float], z: tuple[float, float]) -> np.ndarray:
+    """(n, 3) points uniform in a box; z is height above the table top."""
+    return np.array([[r.uniform(*x), r.uniform(*y), TABLE_TOP_Z + r.uniform(*z)]
+                     for r in rngs])
