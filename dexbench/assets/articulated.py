@@ -43,7 +43,7 @@ def add_button(spec: mujoco.MjSpec, name: str, travel: float = 0.015,
     """A sprung push button; pressed is negative (down), 0 is released."""
     base = mocap_body(spec, name)
     add_geom(base, f"{name}/housing", "box", [0.04, 0.04, 0.02], GREY, pos=[0, 0, 0.02])
-    cap = base.add_body(name=f"{name}/cap", pos=[0, 0, 0.04])
+    cap = base.add_body(name=f"{name}/cap", pos=[0, 0, 0.04], gravcomp=1.0)  # no sag
     cap.add_joint(name=f"{name}/press", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1],
                   range=[-travel, 0.0], stiffness=stiffness, springref=0.0, damping=1.0,
                   armature=1e-3)

@@ -46,6 +46,17 @@ class ObjectInfo:
     zones: tuple[Zone, ...] = ()
 
 
+def new_spec() -> mujoco.MjSpec:
+    """A fresh spec whose angles are radians (MjSpec's default is degrees).
+
+    Every spec dexbench creates comes from here, so joint ranges written in code mean
+    radians everywhere; attached robot models keep their own files' settings.
+    """
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    return spec
+
+
 def free_body(spec: mujoco.MjSpec, name: str) -> mujoco.MjsBody:
     """A body with a free joint `<name>/free`."""
     body = spec.worldbody.add_body(name=name)

@@ -45,10 +45,9 @@ def _add_lathe_mesh(spec: mujoco.MjSpec, name: str, profile, segments: int) -> s
     return name
 
 
-def add_mug(spec: mujoco.MjSpec, name: str, radius: float = 0.04, height: float = 0.095,
-            wall: float = 0.006, mass: float = 0.25, pieces: int = 16,
-            rgba: Sequence[float] = (0.85, 0.85, 0.9, 1.0)) -> ObjectInfo:
-    """An open mug with a handle on its +x side; the rim is a do-not-touch zone."""
+def _open_vessel(spec: mujoco.MjSpec, name: str, radius: float, height: float, wall: float,
+                 mass: float, pieces: int, rgba: Sequence[float]) -> mujoco.MjsBody:
+    """A free open-topped cylinder: lathe visual, convex bottom disc and wall boxes."""
     body = free_body(spec, name)
     outer = [(0.0, 0.0), (radius * 0.92, 0.0), (radius, 0.01), (radius, height)]
     mesh = _add_lathe_mesh(spec, f"{name}/shell", outer, 32)
@@ -64,28 +63,44 @@ def add_mug(spec: mujoco.MjSpec, name: str, radius: float = 0.04, height: float 
         add_geom(body, f"{name}/wall{k}", "box", [wall / 2, half_w, height / 2], rgba,
                  0.5 * mass / pieces, pos=[r * math.cos(a), r * math.sin(a), height / 2],
                  quat=[math.cos(a / 2), 0, 0, math.sin(a / 2)])
+    return body
+
+
+def _vessel_info(name: str, radius: float, height: float, extra_points=None) -> ObjectInfo:
+    rim = (0.0, 0.0, height)
+    return ObjectInfo(name, name, f"{name}/free", False, 0.0, radius + 0.02,
+                      points={"rim": (name, rim), **(extra_points or {})},
+                      axes={"up": (name, (0.0, 0.0, 1.0))},
+                      zones=(Zone(name, "cylinder", rim, radius + 0.004, 0.008),))
+
+
+def add_cup(spec: mujoco.MjSpec, name: str, radius: float = 0.035, height: float = 0.1,
+            wall: float = 0.005, mass: float = 0.12, pieces: int = 16,
+            rgba: Sequence[float] = (0.3, 0.6, 0.85, 1.0)) -> ObjectInfo:
+    """An open cup without a handle; the rim is a do-not-touch zone."""
+    _open_vessel(spec, name, radius, height, wall, mass, pieces, rgba)
+    return _vessel_info(name, radius, height)
+
+
+def add_mug(spec: mujoco.MjSpec, name: str, radius: float = 0.04, height: float = 0.095,
+            wall: float = 0.006, mass: float = 0.25, pieces: int = 16,
+            rgba: Sequence[float] = (0.85, 0.85, 0.9, 1.0)) -> ObjectInfo:
+    """An open mug with a handle on its +x side; the rim is a do-not-touch zone."""
+    body = _open_vessel(spec, name, radius, height, wall, mass, pieces, rgba)
     for k, (x, z, length) in enumerate(((radius + 0.012, 0.55 * height, 0.022),
                                         (radius + 0.004, 0.8 * height, 0.01),
                                         (radius + 0.004, 0.3 * height, 0.01))):
         quat = [1, 0, 0, 0] if k == 0 else [0.7071068, 0, 0.7071068, 0]
         add_geom(body, f"{name}/handle{k}", "capsule", [0.006, length], rgba,
                  0.2 * mass / 3, pos=[x, 0, z], quat=quat)
-    rim = (0.0, 0.0, height)
-    return ObjectInfo(name, name, f"{name}/free", False, 0.0, radius + 0.02,
-                      points={"rim": (name, rim), "handle": (name, (radius + 0.012, 0.0,
-                                                                     0.55 * height))},
-                      axes={"up": (name, (0.0, 0.0, 1.0))},
-                      zones=(Zone(name, "cylinder", rim, radius + 0.004, 0.008),))
+    handle = (radius + 0.012, 0.0, 0.55 * height)
+    return _vessel_info(name, radius, height, {"handle": (name, handle)})
 
 
-def add_bottle(spec: mujoco.MjSpec, name: str, radius: float = 0.03, height: float = 0.18,
-               mass: float = 0.2, rgba: Sequence[float] = (0.2, 0.55, 0.35, 1.0)
-               ) -> ObjectInfo:
-    """A closed bottle (convex): body, shoulder and neck; `centre` is mid-height."""
+def _closed_vessel(spec: mujoco.MjSpec, name: str, profile, radius: float, height: float,
+                   mass: float, rgba: Sequence[float]) -> ObjectInfo:
+    """A free convex lathe solid that collides as its own (convex) mesh."""
     body = free_body(spec, name)
-    neck = 0.012
-    profile = [(0.0, 0.0), (radius * 0.95, 0.0), (radius, 0.008), (radius, 0.62 * height),
-               (neck, 0.85 * height), (neck, height), (0.0, height)]
     mesh = _add_lathe_mesh(spec, f"{name}/shell", profile, 24)
     geom = body.add_geom(name=f"{name}/geom", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh,
                          rgba=list(rgba), condim=4, friction=[1.0, 0.005, 0.0001])
@@ -94,3 +109,21 @@ def add_bottle(spec: mujoco.MjSpec, name: str, radius: float = 0.03, height: flo
                       points={"centre": (name, (0.0, 0.0, height / 2)),
                               "top": (name, (0.0, 0.0, height))},
                       axes={"up": (name, (0.0, 0.0, 1.0))})
+
+
+def add_bottle(spec: mujoco.MjSpec, name: str, radius: float = 0.03, height: float = 0.18,
+               mass: float = 0.2, rgba: Sequence[float] = (0.2, 0.55, 0.35, 1.0)
+               ) -> ObjectInfo:
+    """A closed bottle: body, shoulder and neck; `centre` is mid-height."""
+    neck = 0.012
+    profile = [(0.0, 0.0), (radius * 0.95, 0.0), (radius, 0.008), (radius, 0.62 * height),
+               (neck, 0.85 * height), (neck, height), (0.0, height)]
+    return _closed_vessel(spec, name, profile, radius, height, mass, rgba)
+
+
+def add_jar(spec: mujoco.MjSpec, name: str, radius: float = 0.045, height: float = 0.11,
+            mass: float = 0.3, rgba: Sequence[float] = (0.75, 0.5, 0.3, 1.0)) -> ObjectInfo:
+    """A closed jar with a lid rim: wide, short and convex."""
+    profile = [(0.0, 0.0), (radius * 0.9, 0.0), (radius, 0.01), (radius, 0.8 * height),
+               (0.85 * radius, 0.86 * height), (0.85 * radius, height), (0.0, height)]
+    return _closed_vessel(spec, name, profile, radius, height, mass, rgba)

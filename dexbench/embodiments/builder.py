@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from dexbench.assets.objects import new_spec
 from dexbench.assets.robots import robot_spec
 from dexbench.embodiments.arms import ARMS
 from dexbench.embodiments.hand_geometry import hand_geometry, hand_model_spec
@@ -219,7 +220,7 @@ def arm_home(arm: str, hand: str, side: str) -> tuple[tuple[str, float], ...]:
     Solved once per (arm, hand, side) by IK on a robot-only model; the relative geometry
     is the same for every lateral offset, so y = 0 serves the bimanual sides too.
     """
-    spec = mujoco.MjSpec()
+    spec = new_spec()
     palm = (HOME_PALM_X, 0.0, HOME_PALM_Z)
     layout = _add_arm_side(spec, arm, hand, side, palm, None)
     model = spec.compile()

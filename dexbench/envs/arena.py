@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from dexbench.assets.objects import new_spec
 from dexbench.embodiments.builder import TABLE_TOP_Z
 
 TABLE_HALF_SIZE = (0.6, 0.75)  # table top spans x in [-0.6, 0.6], y in [-0.75, 0.75]
@@ -63,7 +64,7 @@ def apply_options(spec: mujoco.MjSpec, options: PhysicsOptions) -> None:
 
 def build_arena(options: PhysicsOptions) -> mujoco.MjSpec:
     """A fresh spec holding floor, table, lights and cameras."""
-    spec = mujoco.MjSpec()
+    spec = new_spec()
     spec.modelname = "dexbench"
     apply_options(spec, options)
     spec.compiler.autolimits = True
