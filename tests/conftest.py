@@ -1,6 +1,11 @@
 """Shared fixtures: outputs go to a temp dir, never into the checkout."""
 
-import pytest
+import os
+
+# Headless rendering, decided before any test module imports mujoco.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import pytest  # noqa: E402
 
 
 @pytest.fixture(autouse=True)

@@ -38,6 +38,7 @@ WRIST_RANGE = {"x": (-0.6, 0.8), "y": (-0.6, 0.6), "z": (-0.3, 0.5),
                "rx": (-np.pi, np.pi), "ry": (-np.pi, np.pi), "rz": (-np.pi, np.pi)}
 WRIST_KP = {2: 2000.0, 3: 300.0}  # by joint type: slide N/m, hinge Nm/rad
 WRIST_FORCE = {2: 300.0, 3: 50.0}
+WRIST_CAMERA_FOVY = 60.0
 
 
 # Physics options a child model would otherwise try to impose on the composed scene.
@@ -122,6 +123,23 @@ def _quat(rot: np.ndarray) -> list[float]:
     return q.tolist()
 
 
+def _wrist_camera_pose(palm_site_quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Wrist camera pose in the palm body frame, from its placement in the hand frame.
+
+    It sits at the heel of the palm, on the palm side (hand frame (-0.05, 0, 0.05)), and
+    looks along the fingers at the grasp region, with the back of the hand up.
+    """
+    h_rot = np.zeros(9)
+    mujoco.mju_quat2Mat(h_rot, palm_site_quat)
+    h_rot = h_rot.reshape(3, 3)
+    eye, target = np.array([-0.05, 0.0, 0.05]), np.array([0.12, 0.0, 0.07])
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    right = np.cross(forward, [0.0, 0.0, -1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    return h_rot @ eye, h_rot @ np.column_stack([right, up, -forward])
+
+
 def _mark_robot(body: mujoco.MjsBody) -> None:
     """Gravity-compensate a robot subtree, as real arm and hand controllers do."""
     body.gravcomp = 1.0
@@ -141,8 +159,11 @@ def _attach_hand(
     for body_name, offset in zip(parts.fingertip_bodies, geo.fingertip_offsets, strict=True):
         child.body(body_name).add_site(name=f"tip_{body_name}", pos=offset.tolist(),
                                        size=[0.004, 0, 0], group=4)
-    child.body(parts.palm_body).add_site(name="palm", pos=[0, 0, 0],
-                                         quat=geo.palm_site_quat.tolist(), group=4)
+    palm = child.body(parts.palm_body)
+    palm.add_site(name="palm", pos=[0, 0, 0], quat=geo.palm_site_quat.tolist(), group=4)
+    cam_pos, cam_rot = _wrist_camera_pose(geo.palm_site_quat)
+    palm.add_camera(name="wrist_cam", pos=cam_pos.tolist(), quat=_quat(cam_rot),
+                    fovy=WRIST_CAMERA_FOVY)
     root_rot = frame_rot @ geo.frame_rot.T
     root_pos = frame_pos - root_rot @ geo.frame_pos
     frame = parent.add_frame(pos=root_pos.tolist(), quat=_quat(root_rot))

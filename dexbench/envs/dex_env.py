@@ -12,11 +12,12 @@ import numpy as np
 import torch
 
 from dexbench.envs.arena import PhysicsOptions
-from dexbench.envs.observations import ObservationTerms, resolve_groups
+from dexbench.envs.camera_obs import CameraObservations, default_cameras
+from dexbench.envs.observations import CAMERA_GROUPS, ObservationTerms, resolve_preset
 from dexbench.envs.scene import compose_scene
 from dexbench.envs.task_api import SceneView, Task
 from dexbench.sim.backend import DERIVED_FIELDS, STATE_FIELDS
-from dexbench.sim.factory import make_backend
+from dexbench.sim.factory import make_backend, make_renderer
 
 Obs = dict[str, torch.Tensor]
 
@@ -30,7 +31,10 @@ class DexEnv:
 
     `obs` is a preset name or a list of groups; `history` overrides the preset's history
     length (k > 0 stacks the last k frames on axis 1). With `auto_reset`, environments
-    that terminate or truncate are reset inside `step`.
+    that terminate or truncate are reset inside `step`. Camera groups render `cameras`
+    (default: the preset's: front, or front/left/right when multiview; wrist cameras are
+    `<side>/hand/wrist_cam`) at `image_size` (width, height); the point cloud keeps
+    `num_points` points.
     """
 
     def __init__(
@@ -45,6 +49,9 @@ class DexEnv:
         physics: PhysicsOptions | None = None,
         auto_reset: bool = False,
         history: int | None = None,
+        cameras: tuple[str, ...] | list[str] | None = None,
+        image_size: tuple[int, int] = (256, 256),
+        num_points: int = 512,
     ) -> None:
         if num_envs < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
@@ -66,9 +73,15 @@ class DexEnv:
         sites = [s for side in self.embodiment.sides.values() for s in side.fingertip_sites]
         palms = [side.palm_site for side in self.embodiment.sides.values()]
         self.view = SceneView(model, fields, sites, palms, self.scene.hand_geoms)
-        self.groups, self.history = resolve_groups(obs)
-        if history is not None:
-            self.history = history
+        preset = resolve_preset(obs)
+        self.groups = tuple(g for g in preset.groups if g not in CAMERA_GROUPS)
+        self.history = preset.history if history is None else history
+        camera_groups = tuple(g for g in preset.groups if g in CAMERA_GROUPS)
+        self.cameras: CameraObservations | None = None
+        if camera_groups:
+            names = tuple(cameras) if cameras else default_cameras(preset.multiview)
+            renderer = make_renderer(self.sim, *image_size)
+            self.cameras = CameraObservations(renderer, names, camera_groups, num_points)
         self._terms = ObservationTerms(self.scene, self.view, task, fields)
 
         emb = self.embodiment
@@ -189,11 +202,12 @@ class DexEnv:
         out: Obs = {}
         for group in self.groups:
             value = self._terms.compute(group, self.last_action)
-            if value is None:
-                continue
-            if self.history:
-                value = self._stack(group, value, reset_ids)
-            out[group] = value
+            if value is not None:
+                out[group] = value
+        if self.cameras is not None:
+            out.update(self.cameras.compute())
+        if self.history:
+            out = {k: self._stack(k, v, reset_ids) for k, v in out.items()}
         return out
 
     def _stack(self, group: str, value: torch.Tensor, reset_ids: torch.Tensor | None):

@@ -4,7 +4,7 @@ Groups: policy (previous action), proprio (robot joint positions), contact (per-
 force from the task object, robot base frame, clipped to +-20 N), state (task state),
 privileged (robot joint velocities, palm/fingertip poses and velocities, task extras;
 never in a preset), goal (commanded target). Camera groups (rgb, depth, pointcloud)
-are named by the presets but need the renderer, which this version does not have.
+are computed by `camera_obs.CameraObservations`.
 """
 
 from __future__ import annotations
@@ -39,25 +39,18 @@ PRESETS: dict[str, ObsPreset] = {
 }
 
 
-def resolve_groups(obs: str | tuple[str, ...] | list[str]) -> tuple[tuple[str, ...], int]:
-    """Groups and history for a preset name or an explicit list of groups."""
+def resolve_preset(obs: str | tuple[str, ...] | list[str]) -> ObsPreset:
+    """The preset called `obs`, or an ad-hoc one for an explicit list of groups."""
     if isinstance(obs, str):
         if obs not in PRESETS:
             raise ValueError(f"unknown observation preset {obs!r}; presets: "
                              f"{', '.join(PRESETS)}, or pass a list of groups")
-        preset = PRESETS[obs]
-        groups, history = preset.groups, preset.history
-    else:
-        groups, history = tuple(obs), 0
-    for g in groups:
-        if g in CAMERA_GROUPS:
-            raise NotImplementedError(
-                f"observation group {g!r} needs camera rendering, which this version "
-                f"does not provide yet; use groups from {STATE_GROUPS}"
-            )
-        if g not in STATE_GROUPS:
-            raise ValueError(f"unknown observation group {g!r}; groups: {STATE_GROUPS}")
-    return groups, history
+        return PRESETS[obs]
+    unknown = [g for g in obs if g not in (*STATE_GROUPS, *CAMERA_GROUPS)]
+    if unknown:
+        raise ValueError(f"unknown observation groups {unknown}; groups: "
+                         f"{(*STATE_GROUPS, *CAMERA_GROUPS)}")
+    return ObsPreset(tuple(obs), 0, False)
 
 
 class ObservationTerms:

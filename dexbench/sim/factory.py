@@ -6,6 +6,7 @@ import mujoco
 
 from dexbench.sim.backend import SimBackend
 from dexbench.sim.cpu import CpuBackend
+from dexbench.sim.render import CpuRenderer
 
 BACKENDS = ("cpu",)
 
@@ -15,3 +16,10 @@ def make_backend(name: str, model: mujoco.MjModel, num_envs: int, nthread: int =
     if name == "cpu":
         return CpuBackend(model, num_envs, nthread)
     raise ValueError(f"unknown sim backend {name!r}; available: {', '.join(BACKENDS)}")
+
+
+def make_renderer(backend: SimBackend, width: int, height: int) -> CpuRenderer:
+    """The renderer that matches a backend."""
+    if isinstance(backend, CpuBackend):
+        return CpuRenderer(backend, width, height)
+    raise ValueError(f"no renderer for backend {type(backend).__name__}")

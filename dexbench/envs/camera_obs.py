@@ -1,0 +1,58 @@
+"""Camera observation groups: rgb and depth per camera, and the fused point cloud.
+
+Keys are `rgb/<camera>` (uint8, (N, H, W, 3)), `depth/<camera>` (float32 metres,
+(N, H, W)) and `pointcloud` (float32 world frame, (N, num_points, 3)): the third-person
+cameras' depth back-projected, cropped to the table volume (+0.01..+0.60 m above the
+top), thinned evenly and farthest-point sampled.
+"""
+
+from __future__ import annotations
+
+import torch
+
+from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.envs.arena import CAMERAS, TABLE_HALF_SIZE
+from dexbench.envs.pointcloud import crop_mask, depth_to_world, sample_cloud
+
+THIRD_PERSON = tuple(name for name, _, _ in CAMERAS)
+SINGLE_VIEW = ("front",)
+CROP_LO = (-TABLE_HALF_SIZE[0], -TABLE_HALF_SIZE[1], TABLE_TOP_Z + 0.01)
+CROP_HI = (TABLE_HALF_SIZE[0], TABLE_HALF_SIZE[1], TABLE_TOP_Z + 0.60)
+
+
+def default_cameras(multiview: bool) -> tuple[str, ...]:
+    """The paper's cameras: the front view, or the three third-person views."""
+    return THIRD_PERSON if multiview else SINGLE_VIEW
+
+
+class CameraObservations:
+    """Renders once per observation and derives every requested camera group."""
+
+    def __init__(self, renderer, cameras: tuple[str, ...], groups: tuple[str, ...],
+                 num_points: int) -> None:
+        self._renderer = renderer
+        self.cameras = cameras
+        self.groups = groups
+        self.num_points = num_points
+        self.cloud_cameras = tuple(c for c in cameras if c in THIRD_PERSON)
+        if "pointcloud" in groups and not self.cloud_cameras:
+            raise ValueError(f"pointcloud needs one of the cameras {THIRD_PERSON}")
+
+    def compute(self) -> dict[str, torch.Tensor]:
+        want_depth = "depth" in self.groups or "pointcloud" in self.groups
+        frames = self._renderer.render(list(self.cameras), rgb="rgb" in self.groups,
+                                       depth=want_depth)
+        out: dict[str, torch.Tensor] = {}
+        for cam, f in frames.items():
+            if "rgb" in self.groups:
+                out[f"rgb/{cam}"] = f.rgb
+            if "depth" in self.groups:
+                out[f"depth/{cam}"] = f.depth
+        if "pointcloud" in self.groups:
+            clouds = [depth_to_world(frames[c].depth, self._renderer.fovy(c),
+                                     frames[c].cam_pos, frames[c].cam_mat)
+                      for c in self.cloud_cameras]
+            points = torch.cat(clouds, dim=1)
+            cloud = sample_cloud(points, crop_mask(points, CROP_LO, CROP_HI), self.num_points)
+            out["pointcloud"] = cloud.to(torch.float32)
+        return out

@@ -1,0 +1,80 @@
+"""CPU rendering: `mujoco.Renderer` (EGL or OSMesa, headless) over the CPU backend.
+
+Each environment's state is copied into one scratch MjData (`Batch.get_data`) and
+rendered from each camera. RGB is uint8, depth is metres along the camera axis
+(distance to the image plane); camera poses come back with the images so depth can be
+turned into world points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import torch
+
+from dexbench.sim.cpu import CpuBackend
+
+
+@dataclass
+class CameraFrames:
+    """One camera's images for every environment."""
+
+    rgb: torch.Tensor | None  # (N, H, W, 3) uint8
+    depth: torch.Tensor | None  # (N, H, W) float32, metres
+    cam_pos: torch.Tensor  # (N, 3) float64, world
+    cam_mat: torch.Tensor  # (N, 3, 3) float64, camera axes as columns (looks along -z)
+
+
+class CpuRenderer:
+    """Renders named cameras of every world of a `CpuBackend`."""
+
+    def __init__(self, backend: CpuBackend, width: int, height: int) -> None:
+        self._backend = backend
+        self._model = backend.model
+        self.width, self.height = width, height
+        try:
+            self._renderer = mujoco.Renderer(self._model, height=height, width=width)
+        except (mujoco.FatalError, RuntimeError) as err:
+            raise RuntimeError(
+                f"cannot create an offscreen OpenGL context ({err}); headless machines "
+                "need MUJOCO_GL=egl (libEGL) or MUJOCO_GL=osmesa set before mujoco is "
+                "first imported (importing dexbench first sets egl by default)") from None
+        self._data = mujoco.MjData(self._model)
+
+    def fovy(self, camera: str) -> float:
+        """Vertical field of view (degrees) of a camera."""
+        return float(self._model.cam_fovy[self._model.camera(camera).id])
+
+    def render(self, cameras: list[str], rgb: bool, depth: bool) -> dict[str, CameraFrames]:
+        n, model = self._backend.num_envs, self._model
+        h, w = self.height, self.width
+        ids = [model.camera(c).id for c in cameras]
+        out_rgb = np.zeros((len(cameras), n, h, w, 3), np.uint8) if rgb else None
+        out_depth = np.zeros((len(cameras), n, h, w), np.float32) if depth else None
+        pos = np.zeros((len(cameras), n, 3))
+        mat = np.zeros((len(cameras), n, 3, 3))
+        r = self._renderer
+        for env in range(n):
+            self._backend.batch.get_data(env, self._data)
+            for k, cam in enumerate(ids):
+                pos[k, env] = self._data.cam_xpos[cam]
+                mat[k, env] = self._data.cam_xmat[cam].reshape(3, 3)
+                r.update_scene(self._data, camera=cam)
+                if rgb:
+                    out_rgb[k, env] = r.render()
+                if depth:
+                    r.enable_depth_rendering()
+                    out_depth[k, env] = r.render()
+                    r.disable_depth_rendering()
+        return {
+            cam: CameraFrames(
+                torch.from_numpy(out_rgb[k]) if rgb else None,
+                torch.from_numpy(out_depth[k]) if depth else None,
+                torch.from_numpy(pos[k]), torch.from_numpy(mat[k]))
+            for k, cam in enumerate(cameras)
+        }
+
+    def close(self) -> None:
+        self._renderer.close()

@@ -1,0 +1,125 @@
+"""Camera observation groups: presets, determinism, point-cloud geometry, FPS."""
+
+import mujoco
+import numpy as np
+import pytest
+import torch
+
+from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.envs.camera_obs import CROP_LO
+from dexbench.envs.observations import PRESETS
+from dexbench.envs.pointcloud import crop_mask, depth_to_world, farthest_point_sample
+from dexbench.tasks.registry import TASKS, make_env
+
+SMALL = {"image_size": (32, 24), "num_points": 64}
+
+
+def _expected_keys(preset: str, env) -> dict:
+    p = PRESETS[preset]
+    cams = ("front", "left", "right") if p.multiview else ("front",)
+    shapes = {}
+    for g in p.groups:
+        if g == "rgb":
+            shapes.update({f"rgb/{c}": ((24, 32, 3), torch.uint8) for c in cams})
+        elif g == "depth":
+            shapes.update({f"depth/{c}": ((24, 32), torch.float32) for c in cams})
+        elif g == "pointcloud":
+            shapes["pointcloud"] = ((64, 3), torch.float32)
+        elif g == "policy":
+            shapes["policy"] = ((env.action_dim,), torch.float32)
+        elif g == "proprio":
+            shapes["proprio"] = ((len(env.embodiment.proprio_joints),), torch.float32)
+    return shapes
+
+
+@pytest.mark.parametrize("task", sorted(TASKS))
+def test_every_preset_has_documented_shapes(task):
+    for preset in PRESETS:
+        env = make_env(task, "bimanual_floating_shadow" if TASKS[task].bimanual
+                       else "floating_shadow", num_envs=2, obs=preset, **SMALL)
+        obs = env.reset()
+        expected = _expected_keys(preset, env)
+        for key, (shape, dtype) in expected.items():
+            hist = (PRESETS[preset].history,) if PRESETS[preset].history else ()
+            assert tuple(obs[key].shape) == (2, *hist, *shape), (task, preset, key)
+            assert obs[key].dtype == dtype
+        assert "privileged" not in obs
+        extra = set(obs) - set(expected) - {"contact", "state", "goal"}
+        assert not extra, extra
+
+
+def test_same_seed_same_images_and_envs_differ():
+    a = make_env("PickCube", num_envs=2, seed=4, obs="rgb_depth", image_size=(48, 48))
+    b = make_env("PickCube", num_envs=2, seed=4, obs="rgb_depth", image_size=(48, 48))
+    oa, ob = a.reset(), b.reset()
+    assert torch.equal(oa["rgb/front"], ob["rgb/front"])
+    assert torch.equal(oa["depth/front"], ob["depth/front"])
+    assert not torch.equal(oa["rgb/front"][0, -1], oa["rgb/front"][1, -1]), "cubes differ"
+
+
+def test_wrist_cameras_render():
+    env = make_env("BimanualLiftTray", num_envs=1, obs=["rgb"], image_size=(32, 32),
+                   cameras=["right/hand/wrist_cam", "left/hand/wrist_cam"])
+    obs = env.reset()
+    assert obs["rgb/right/hand/wrist_cam"].shape == (1, 32, 32, 3)
+    assert obs["rgb/left/hand/wrist_cam"].float().std() > 0
+
+
+def _box_distance(p_local: np.ndarray, half: float) -> np.ndarray:
+    """Unsigned distance of points (box frame) to the surface of a cube."""
+    q = np.abs(p_local) - half
+    outside = np.linalg.norm(np.maximum(q, 0.0), axis=-1)
+    inside = np.minimum(q.max(axis=-1), 0.0)
+    return np.abs(outside + inside)
+
+
+def test_depth_points_of_the_cube_lie_on_its_surface():
+    env = make_env("PickCube", num_envs=2, seed=1, obs=["depth"], image_size=(160, 160),
+                   cameras=["front", "left"])
+    env.reset()
+    frames = env.cameras._renderer.render(["front", "left"], rgb=False, depth=True)
+    pos = env.view.body_pos("cube").numpy()
+    quat = env.view.body_quat("cube").numpy()
+    checked = 0
+    for cam, f in frames.items():
+        pts = depth_to_world(f.depth, env.cameras._renderer.fovy(cam), f.cam_pos, f.cam_mat)
+        pts = pts.numpy()
+        for e in range(2):
+            # near the cube and above the table top (which the cube stands on)
+            near = pts[e][(np.linalg.norm(pts[e] - pos[e], axis=1) < 0.05)
+                          & (pts[e][:, 2] > TABLE_TOP_Z + 0.001)]
+            rot = np.zeros(9)
+            mujoco.mju_quat2Mat(rot, quat[e])
+            local = (near - pos[e]) @ rot.reshape(3, 3)
+            dist = _box_distance(local, 0.025)
+            assert dist.max(initial=0.0) < 0.003, (cam, e, dist.max())
+            checked += len(near)
+    assert checked > 100
+
+
+def test_pointcloud_is_cropped_to_the_table_volume():
+    env = make_env("PickCube", num_envs=2, obs="pointcloud", image_size=(64, 64))
+    cloud = env.reset()["pointcloud"][:, -1]
+    assert cloud.shape == (2, 512, 3)
+    assert crop_mask(cloud.double(), CROP_LO, (0.6, 0.75, 1.2)).all()
+    assert (cloud[..., 2] >= CROP_LO[2] - 1e-6).all()
+
+
+def _fps_reference(points: np.ndarray, valid: np.ndarray, n: int) -> list[int]:
+    idx = [int(np.flatnonzero(valid)[0])]
+    dist = np.full(len(points), np.inf)
+    dist[~valid] = -1
+    for _ in range(n - 1):
+        d = ((points - points[idx[-1]]) ** 2).sum(axis=1)
+        dist = np.where(valid, np.minimum(dist, d), dist)
+        idx.append(int(dist.argmax()))
+    return idx
+
+
+def test_fps_matches_brute_force_reference():
+    rng = np.random.default_rng(0)
+    pts = rng.normal(size=(3, 500, 3))
+    valid = rng.uniform(size=(3, 500)) < 0.7
+    got = farthest_point_sample(torch.from_numpy(pts), torch.from_numpy(valid), 32)
+    for b in range(3):
+        assert got[b].tolist() == _fps_reference(pts[b], valid[b], 32)
