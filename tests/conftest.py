@@ -5,7 +5,7 @@ import os
 # Headless rendering, decided before any test module imports mujoco.
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import pytest  # noqa: E402
+import pytest
 
 
 @pytest.fixture(autouse=True)
