@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from dexbench.cli.bench import bench_sim
+from dexbench.cli.bench import bench_render, bench_sim
 from dexbench.cli.config import ConfigError, load_config
 from dexbench.cli.introspect import inspect
 from dexbench.embodiments.builder import embodiment_names
@@ -72,3 +72,9 @@ def test_bench_sim_reports_throughput_and_writes_run_dir():
     run_dir = pathlib.Path(result["run_dir"])
     assert json.loads((run_dir / "metrics.json").read_text())["ratio"] == result["ratio"]
     assert (run_dir / "config.yaml").exists()
+
+
+def test_bench_render_reports_images_per_second():
+    result = bench_render(["num_envs=2", "steps=2", "width=32", "height=32"])
+    assert result["images_per_s"] > 0 and result["resolution"] == [32, 32]
+    assert result["num_envs"] == 2 and "CpuRenderer" in result["renderer"]

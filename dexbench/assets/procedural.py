@@ -1,129 +1,86 @@
-"""Lathe (surface-of-revolution) vessels: mugs and bottles built from a 2-D profile.
+"""Vessel presets on top of `meshes.add_lathe_object`: mug, cup, jar (open) and bottle.
 
-The visual mesh is the revolved profile. Collision geometry is convex by construction:
-a closed convex vessel (bottle) collides as its own mesh (MuJoCo uses the convex hull);
-an open vessel (mug) collides as a bottom disc plus a ring of thin wall boxes, an
-explicit convex decomposition that lets things sit inside it.
+Each stands upright with its bottom at the body origin, so `rest_height` is 0; `up` is
+the vessel axis. Open vessels mark their rim (a disc over the opening) as a do-not-touch
+zone, since the pouring tasks forbid fingers on or over the rim.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import mujoco
-import numpy as np
 
-from dexbench.assets.objects import ObjectInfo, Zone, add_geom, free_body
+from dexbench.assets.meshes import add_lathe_object
+from dexbench.assets.objects import ObjectInfo, Vec3, Zone, add_geom
 
-
-def lathe_mesh(profile: Sequence[tuple[float, float]], segments: int = 32
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (P*S, 3) and outward triangles of a profile (r, z) revolved about z.
-
-    The profile runs from bottom to top; points with r = 0 are kept as rings of
-    coincident vertices, which keeps the indexing uniform.
-    """
-    prof = np.asarray(profile, dtype=float)
-    angles = np.linspace(0.0, 2 * math.pi, segments, endpoint=False)
-    verts = np.stack([np.outer(prof[:, 0], np.cos(angles)),
-                      np.outer(prof[:, 0], np.sin(angles)),
-                      np.repeat(prof[:, 1:2], segments, axis=1)], axis=-1).reshape(-1, 3)
-    faces = []
-    for i in range(len(prof) - 1):
-        for j in range(segments):
-            a, b = i * segments + j, i * segments + (j + 1) % segments
-            c, d = a + segments, b + segments
-            faces += [(a, b, d), (a, d, c)]
-    return verts, np.array(faces, dtype=np.int32)
+UP = (0.0, 0.0, 1.0)
 
 
-def _add_lathe_mesh(spec: mujoco.MjSpec, name: str, profile, segments: int) -> str:
-    verts, faces = lathe_mesh(profile, segments)
-    spec.add_mesh(name=name, uservert=verts.ravel().tolist(),
-                  userface=faces.ravel().tolist())
-    return name
-
-
-def _open_vessel(spec: mujoco.MjSpec, name: str, radius: float, height: float, wall: float,
-                 mass: float, pieces: int, rgba: Sequence[float]) -> mujoco.MjsBody:
-    """A free open-topped cylinder: lathe visual, convex bottom disc and wall boxes."""
-    body = free_body(spec, name)
-    outer = [(0.0, 0.0), (radius * 0.92, 0.0), (radius, 0.01), (radius, height)]
-    mesh = _add_lathe_mesh(spec, f"{name}/shell", outer, 32)
-    body.add_geom(name=f"{name}/visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh,
-                  rgba=list(rgba), contype=0, conaffinity=0, group=2, mass=0)
-    bottom = 0.006
-    add_geom(body, f"{name}/bottom", "cylinder", [radius - 0.002, bottom / 2], rgba,
-             0.3 * mass, pos=[0, 0, bottom / 2])
-    half_w = radius * math.tan(math.pi / pieces) + 1e-3
-    for k in range(pieces):
-        a = 2 * math.pi * k / pieces
-        r = radius - wall / 2
-        add_geom(body, f"{name}/wall{k}", "box", [wall / 2, half_w, height / 2], rgba,
-                 0.5 * mass / pieces, pos=[r * math.cos(a), r * math.sin(a), height / 2],
-                 quat=[math.cos(a / 2), 0, 0, math.sin(a / 2)])
-    return body
-
-
-def _vessel_info(name: str, radius: float, height: float, extra_points=None) -> ObjectInfo:
+def _open_info(name: str, radius: float, height: float, reach: float,
+               extra_points: dict[str, tuple[str, Vec3]] | None = None) -> ObjectInfo:
     rim = (0.0, 0.0, height)
-    return ObjectInfo(name, name, f"{name}/free", False, 0.0, radius + 0.02,
-                      points={"rim": (name, rim), **(extra_points or {})},
-                      axes={"up": (name, (0.0, 0.0, 1.0))},
-                      zones=(Zone(name, "cylinder", rim, radius + 0.004, 0.008),))
+    return ObjectInfo(name, name, f"{name}/free", False, 0.0, reach,
+                      points={"rim": (name, rim), "bottom": (name, (0.0, 0.0, 0.0)),
+                              **(extra_points or {})},
+                      axes={"up": (name, UP)},
+                      zones=(Zone(name, "cylinder", rim, radius + 0.005, 0.01),))
 
 
-def add_cup(spec: mujoco.MjSpec, name: str, radius: float = 0.035, height: float = 0.1,
-            wall: float = 0.005, mass: float = 0.12, pieces: int = 16,
+def add_cup(spec: mujoco.MjSpec, name: str, radius: float = 0.035, height: float = 0.10,
+            wall: float = 0.004, mass: float = 0.12,
             rgba: Sequence[float] = (0.3, 0.6, 0.85, 1.0)) -> ObjectInfo:
-    """An open cup without a handle; the rim is a do-not-touch zone."""
-    _open_vessel(spec, name, radius, height, wall, mass, pieces, rgba)
-    return _vessel_info(name, radius, height)
+    """A handle-less cup, slightly narrower at the foot; `radius` is at the rim."""
+    profile = [(0.8 * radius, 0.0), (radius, height)]
+    add_lathe_object(spec, name, profile, wall, mass, rgba, bottom_thickness=0.006)
+    return _open_info(name, radius, height, radius)
 
 
 def add_mug(spec: mujoco.MjSpec, name: str, radius: float = 0.04, height: float = 0.095,
-            wall: float = 0.006, mass: float = 0.25, pieces: int = 16,
+            wall: float = 0.006, mass: float = 0.25,
             rgba: Sequence[float] = (0.85, 0.85, 0.9, 1.0)) -> ObjectInfo:
-    """An open mug with a handle on its +x side; the rim is a do-not-touch zone."""
-    body = _open_vessel(spec, name, radius, height, wall, mass, pieces, rgba)
-    for k, (x, z, length) in enumerate(((radius + 0.012, 0.55 * height, 0.022),
-                                        (radius + 0.004, 0.8 * height, 0.01),
-                                        (radius + 0.004, 0.3 * height, 0.01))):
-        quat = [1, 0, 0, 0] if k == 0 else [0.7071068, 0, 0.7071068, 0]
-        add_geom(body, f"{name}/handle{k}", "capsule", [0.006, length], rgba,
-                 0.2 * mass / 3, pos=[x, 0, z], quat=quat)
-    handle = (radius + 0.012, 0.0, 0.55 * height)
-    return _vessel_info(name, radius, height, {"handle": (name, handle)})
+    """A straight mug with a capsule handle on its +x side (15% of the mass).
+
+    Points: `rim` (centre of the opening), `bottom`, `handle` (middle of the grip bar).
+    """
+    body = add_lathe_object(spec, name, [(0.95 * radius, 0.0), (radius, 0.008),
+                                         (radius, height)],
+                            wall, 0.85 * mass, rgba, bottom_thickness=0.008)
+    grip_x, bar = radius + 0.028, 0.006  # leaves a 2.2 cm gap for fingers
+    arm = (0.7071068, 0, 0.7071068, 0)  # capsule along x
+    parts = (((grip_x, 0, 0.5 * height), (1, 0, 0, 0), 0.2 * height),
+             ((radius + 0.014, 0, 0.75 * height), arm, 0.014),
+             ((radius + 0.014, 0, 0.25 * height), arm, 0.014))
+    for k, (pos, quat, half_len) in enumerate(parts):
+        add_geom(body, f"{name}/handle{k}", "capsule", [bar, half_len], rgba, 0.05 * mass,
+                 pos=list(pos), quat=list(quat))
+    return _open_info(name, radius, height, grip_x + bar,
+                      {"handle": (name, (grip_x, 0.0, 0.5 * height))})
 
 
-def _closed_vessel(spec: mujoco.MjSpec, name: str, profile, radius: float, height: float,
-                   mass: float, rgba: Sequence[float]) -> ObjectInfo:
-    """A free convex lathe solid that collides as its own (convex) mesh."""
-    body = free_body(spec, name)
-    mesh = _add_lathe_mesh(spec, f"{name}/shell", profile, 24)
-    geom = body.add_geom(name=f"{name}/geom", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh,
-                         rgba=list(rgba), condim=4, friction=[1.0, 0.005, 0.0001])
-    geom.mass = mass
-    return ObjectInfo(name, name, f"{name}/free", False, 0.0, radius,
-                      points={"centre": (name, (0.0, 0.0, height / 2)),
-                              "top": (name, (0.0, 0.0, height))},
-                      axes={"up": (name, (0.0, 0.0, 1.0))})
+def add_jar(spec: mujoco.MjSpec, name: str, radius: float = 0.045, height: float = 0.12,
+            wall: float = 0.005, mass: float = 0.3,
+            rgba: Sequence[float] = (0.75, 0.5, 0.3, 1.0)) -> ObjectInfo:
+    """An open, lidless jar with a shoulder and a wide neck (80% of the body radius)."""
+    neck = 0.8 * radius
+    profile = [(0.9 * radius, 0.0), (radius, 0.01), (radius, 0.78 * height),
+               (neck, 0.88 * height), (neck, height)]
+    add_lathe_object(spec, name, profile, wall, mass, rgba, bottom_thickness=0.008)
+    return _open_info(name, neck, height, radius)
 
 
 def add_bottle(spec: mujoco.MjSpec, name: str, radius: float = 0.03, height: float = 0.18,
                mass: float = 0.2, rgba: Sequence[float] = (0.2, 0.55, 0.35, 1.0)
                ) -> ObjectInfo:
-    """A closed bottle: body, shoulder and neck; `centre` is mid-height."""
+    """A closed bottle: body, shoulder and a neck of radius 0.012 m.
+
+    Points: `centre` (mid-height), `top` (centre of the cap face).
+    """
     neck = 0.012
-    profile = [(0.0, 0.0), (radius * 0.95, 0.0), (radius, 0.008), (radius, 0.62 * height),
-               (neck, 0.85 * height), (neck, height), (0.0, height)]
-    return _closed_vessel(spec, name, profile, radius, height, mass, rgba)
-
-
-def add_jar(spec: mujoco.MjSpec, name: str, radius: float = 0.045, height: float = 0.11,
-            mass: float = 0.3, rgba: Sequence[float] = (0.75, 0.5, 0.3, 1.0)) -> ObjectInfo:
-    """A closed jar with a lid rim: wide, short and convex."""
-    profile = [(0.0, 0.0), (radius * 0.9, 0.0), (radius, 0.01), (radius, 0.8 * height),
-               (0.85 * radius, 0.86 * height), (0.85 * radius, height), (0.0, height)]
-    return _closed_vessel(spec, name, profile, radius, height, mass, rgba)
+    profile = [(radius * 0.92, 0.0), (radius, 0.008), (radius, 0.62 * height),
+               (neck, 0.85 * height), (neck, height)]
+    add_lathe_object(spec, name, profile, None, mass, rgba)
+    return ObjectInfo(name, name, f"{name}/free", False, 0.0, radius,
+                      points={"centre": (name, (0.0, 0.0, height / 2)),
+                              "top": (name, (0.0, 0.0, height))},
+                      axes={"up": (name, UP)})

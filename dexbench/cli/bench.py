@@ -9,6 +9,7 @@ model with `mujoco.batch` alone, from the same states and with the same controls
 from __future__ import annotations
 
 import json
+import os
 import platform
 import time
 
@@ -21,7 +22,8 @@ from dexbench.cli.config import env_kwargs, load_config, new_run_dir, write_atom
 from dexbench.envs.dex_env import DexEnv
 from dexbench.tasks.registry import make_env
 
-USAGE = "usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=...] ..."
+USAGE = """usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=...] ...
+       python bench.py render [num_envs=16] [width=128] [height=128] ..."""
 
 
 def _actions(env: DexEnv, count: int, noise: float, seed: int) -> list[torch.Tensor]:
@@ -89,6 +91,37 @@ def bench_sim(overrides: list[str]) -> dict:
     return result
 
 
+def bench_render(overrides: list[str]) -> dict:
+    """RGB-D images per second of one camera (an RGB + depth pair counts once)."""
+    cfg = load_config("bench", ["num_envs=16", "steps=20", *overrides])
+    width, height = int(cfg.width), int(cfg.height)
+    kwargs = env_kwargs(cfg)
+    kwargs.update(obs=["rgb", "depth"], image_size=(width, height))
+    env = make_env(**kwargs)
+    run_dir = new_run_dir("bench", f"render-{env.task.name}-{env.embodiment.name}", cfg)
+    env.reset()
+    renderer, n, steps = env.cameras._renderer, env.num_envs, int(cfg.steps)
+    renderer.render(["front"], rgb=True, depth=True)
+    t0 = time.perf_counter()
+    for _ in tqdm(range(steps), desc=f"render x{n}", leave=False):
+        renderer.render(["front"], rgb=True, depth=True)
+    elapsed = time.perf_counter() - t0
+    result = {
+        "benchmark": "render",
+        "renderer": f"{cfg.sim.backend} ({type(renderer).__name__}, "
+                    f"MUJOCO_GL={os.environ.get('MUJOCO_GL', '')})",
+        "task": env.task.name,
+        "embodiment": env.embodiment.name,
+        "num_envs": n,
+        "resolution": [width, height],
+        "images_per_s": round(n * steps / elapsed, 1),
+        "mujoco": mujoco.__version__,
+        "run_dir": str(run_dir),
+    }
+    write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
+    return result
+
+
 def format_table(result: dict) -> str:
     rows = [("task", result["task"]), ("embodiment", result["embodiment"]),
             ("backend", f"{result['backend']} ({result['nthread']} threads)"),
@@ -102,10 +135,15 @@ def format_table(result: dict) -> str:
 
 
 def main(argv: list[str]) -> int:
-    if not argv or argv[0] != "sim":
+    if argv[:1] == ["sim"]:
+        result = bench_sim(argv[1:])
+        print(format_table(result))
+    elif argv[:1] == ["render"]:
+        result = bench_render(argv[1:])
+        print(f"{result['images_per_s']:,.0f} RGB-D images/s ({result['renderer']}, "
+              f"{result['num_envs']} envs, {result['resolution'][0]}x{result['resolution'][1]})")
+    else:
         print(USAGE)
         return 2
-    result = bench_sim(argv[1:])
-    print(format_table(result))
     print(json.dumps(result))
     return 0

@@ -70,6 +70,9 @@ def build_arena(options: PhysicsOptions) -> mujoco.MjSpec:
     spec.compiler.autolimits = True
     spec.visual.global_.offwidth = 1024
     spec.visual.global_.offheight = 1024
+    # A 1024 shadow map keeps soft-rasterized (EGL/OSMesa) frames ~4x faster than the
+    # default 4096 with shadows still readable at policy resolutions.
+    spec.visual.quality.shadowsize = 1024
     world = spec.worldbody
     world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[3, 3, 0.05],
                    rgba=[0.55, 0.55, 0.55, 1])
