@@ -123,3 +123,36 @@ def test_fps_matches_brute_force_reference():
     got = farthest_point_sample(torch.from_numpy(pts), torch.from_numpy(valid), 32)
     for b in range(3):
         assert got[b].tolist() == _fps_reference(pts[b], valid[b], 32)
+
+
+def _variation_env(**kw):
+    from dexbench.envs.variation import PhysicalVariation, VisualVariation
+    return make_env("PickCube", num_envs=3, seed=5, obs=["rgb", "proprio"],
+                    image_size=(48, 48), visual=VisualVariation(enabled=True, **kw),
+                    physical=PhysicalVariation(enabled=True, obs_noise=0.01))
+
+
+def test_visual_variation_differs_across_envs_and_reproduces_with_seed():
+    a, b = _variation_env().reset(), _variation_env().reset()
+    assert torch.equal(a["rgb/front"], b["rgb/front"]) and torch.equal(a["proprio"],
+                                                                      b["proprio"])
+    imgs = a["rgb/front"].float()
+    assert all((imgs[i] - imgs[j]).abs().mean() > 2.0 for i, j in ((0, 1), (1, 2), (0, 2)))
+    test = _variation_env(split="test").reset()
+    assert not torch.equal(test["rgb/front"], a["rgb/front"])
+
+
+def test_variation_does_not_change_the_task_samples():
+    plain = make_env("PickCube", num_envs=3, seed=5).reset()["state"]
+    varied = _variation_env()
+    varied.reset()
+    torch.testing.assert_close(varied.task.state_obs(varied.view).float(), plain)
+
+
+def test_physical_variation_scales_within_ranges():
+    env = _variation_env()
+    env.reset()
+    model, mass = env.scene.model, env.sim.model_field("body_mass")
+    cube = model.body("cube").id
+    ratio = mass[:, cube] / model.body_mass[cube]
+    assert ((ratio >= 0.7) & (ratio <= 1.3)).all() and len(set(ratio.tolist())) == 3

@@ -10,6 +10,7 @@ profile turns inward (a bottle's neck), so no piece's hull fills in a concavity.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 
@@ -95,7 +96,7 @@ def convex_runs(side: Profile) -> list[list[tuple[float, float]]]:
     """
     pts = [tuple(map(float, p)) for p in side]
     runs, run = [], [pts[0]]
-    for prev, cur, nxt in zip(pts, pts[1:], pts[2:]):
+    for prev, cur, nxt in zip(pts, pts[1:], pts[2:], strict=False):
         run.append(cur)
         turn = (cur[0] - prev[0]) * (nxt[1] - cur[1]) - (cur[1] - prev[1]) * (nxt[0] - cur[0])
         if turn < -1e-12:
@@ -146,7 +147,7 @@ def add_lathe_object(spec: mujoco.MjSpec, name: str, outer_profile: Profile,
         pieces.append((f"{name}/bottom", verts, faces, [[1.0, 0.0, 0.0, 0.0]]))
         half = math.pi / sectors
         turns = [_z_quat(2 * half * k) for k in range(sectors)]
-        for i, (z0, z1) in enumerate(zip(levels, levels[1:])):
+        for i, (z0, z1) in enumerate(itertools.pairwise(levels)):
             rings = [sector(radius_at(side, z) - wall_thickness, radius_at(side, z), half)
                      for z in (z0, z1)]
             verts, faces = loft_mesh(rings, [z0, z1])

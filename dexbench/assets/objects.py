@@ -8,7 +8,8 @@ zones. Sizes, masses and frictions are parameters.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import mujoco
@@ -16,6 +17,8 @@ import numpy as np
 
 DEFAULT_FRICTION = (1.0, 0.005, 0.0001)
 Vec3 = tuple[float, float, float]
+UP: Vec3 = (0.0, 0.0, 1.0)
+ALONG_X = [0.7071068, 0.0, 0.7071068, 0.0]  # turns a geom's z axis (capsule, cylinder) onto x
 
 
 @dataclass(frozen=True)
@@ -92,24 +95,64 @@ def add_free_box(spec: mujoco.MjSpec, name: str, half_size: Sequence[float], mas
 
 
 def add_sphere(spec: mujoco.MjSpec, name: str, radius: float = 0.03, mass: float = 0.1,
-               rgba: Sequence[float] = (0.2, 0.4, 0.9, 1.0)) -> ObjectInfo:
+               rgba: Sequence[float] = (0.2, 0.4, 0.9, 1.0),
+               friction: Sequence[float] = DEFAULT_FRICTION) -> ObjectInfo:
+    """A free ball; its origin is its centre."""
     body = free_body(spec, name)
-    add_geom(body, f"{name}/geom", "sphere", [radius], rgba, mass)
+    add_geom(body, f"{name}/geom", "sphere", [radius], rgba, mass, friction)
     return ObjectInfo(name, name, f"{name}/free", False, radius, radius)
 
 
-def add_stick(spec: mujoco.MjSpec, name: str, length: float = 0.15, radius: float = 0.015,
-              mass: float = 0.08, foot_radius: float = 0.035) -> ObjectInfo:
-    """A stick standing upright on a small flat foot, so it rests stably at reset."""
+def add_cylinder(spec: mujoco.MjSpec, name: str, radius: float = 0.025,
+                 half_height: float = 0.035, mass: float = 0.1,
+                 rgba: Sequence[float] = (0.9, 0.7, 0.1, 1.0),
+                 friction: Sequence[float] = DEFAULT_FRICTION) -> ObjectInfo:
+    """A free cylinder standing on one end; its origin is its centre."""
     body = free_body(spec, name)
+    add_geom(body, f"{name}/geom", "cylinder", [radius, half_height], rgba, mass, friction)
+    return ObjectInfo(name, name, f"{name}/free", False, half_height, radius,
+                      axes={"up": (name, UP)})
+
+
+def add_capsule(spec: mujoco.MjSpec, name: str, radius: float = 0.02,
+                half_length: float = 0.03, mass: float = 0.1,
+                rgba: Sequence[float] = (0.6, 0.2, 0.8, 1.0),
+                friction: Sequence[float] = DEFAULT_FRICTION) -> ObjectInfo:
+    """A free capsule lying along its x axis (standing on a round end is unstable)."""
+    body = free_body(spec, name)
+    add_geom(body, f"{name}/geom", "capsule", [radius, half_length], rgba, mass, friction,
+             quat=ALONG_X)
+    return ObjectInfo(name, name, f"{name}/free", False, radius, half_length + radius,
+                      axes={"long": (name, (1.0, 0.0, 0.0))})
+
+
+def add_stick(spec: mujoco.MjSpec, name: str, length: float = 0.25, radius: float = 0.015,
+              mass: float = 0.1, upright: bool = True,
+              foot_radius: float = 0.035) -> ObjectInfo:
+    """A stick, by default standing upright on a flat foot (40% of its mass).
+
+    PickUpStick needs the stick within 30 deg of vertical while lifted, so it starts
+    upright; the foot keeps it standing (it tips only past ~20 deg). `upright=False`
+    gives a footless capsule lying along x instead, which a hand must lift and turn.
+    Axis `up` is the stick's length direction, the one that should point up when held;
+    point `top` is its upper end when upright.
+    """
+    body = free_body(spec, name)
+    wood = (0.85, 0.65, 0.3, 1.0)
+    if not upright:
+        add_geom(body, f"{name}/shaft", "capsule", [radius, length / 2 - radius], wood, mass,
+                 quat=ALONG_X)
+        return ObjectInfo(name, name, f"{name}/free", False, radius, length / 2,
+                          points={"top": (name, (length / 2, 0.0, 0.0))},
+                          axes={"up": (name, (1.0, 0.0, 0.0))})
     foot_h = 0.006
     add_geom(body, f"{name}/foot", "cylinder", [foot_radius, foot_h], (0.3, 0.3, 0.3, 1),
-             0.25 * mass, pos=[0, 0, foot_h])
-    add_geom(body, f"{name}/shaft", "cylinder", [radius, length / 2],
-             (0.85, 0.65, 0.3, 1), 0.75 * mass, pos=[0, 0, 2 * foot_h + length / 2])
+             0.4 * mass, pos=[0, 0, foot_h])
+    add_geom(body, f"{name}/shaft", "cylinder", [radius, length / 2], wood, 0.6 * mass,
+             pos=[0, 0, 2 * foot_h + length / 2])
     return ObjectInfo(name, name, f"{name}/free", False, 0.0, foot_radius,
                       points={"top": (name, (0.0, 0.0, 2 * foot_h + length))},
-                      axes={"up": (name, (0.0, 0.0, 1.0))})
+                      axes={"up": (name, UP)})
 
 
 def add_goal_marker(spec: mujoco.MjSpec, name: str, radius: float = 0.02,
@@ -121,32 +164,28 @@ def add_goal_marker(spec: mujoco.MjSpec, name: str, radius: float = 0.02,
     return ObjectInfo(name, name, None, True, 0.0, 0.0)
 
 
-PRIMITIVE_SHAPES = {
-    "box": ("box", (0.025, 0.025, 0.025), (0.8, 0.2, 0.2, 1)),
-    "ball": ("sphere", (0.03,), (0.2, 0.4, 0.9, 1)),
-    "cylinder": ("cylinder", (0.025, 0.035), (0.9, 0.7, 0.1, 1)),
-    "capsule": ("capsule", (0.02, 0.03), (0.6, 0.2, 0.8, 1)),
-    "prism": ("box", (0.02, 0.045, 0.02), (0.1, 0.7, 0.6, 1)),
+PRIMITIVE_SHAPES: dict[str, Callable[[mujoco.MjSpec, str, float], ObjectInfo]] = {
+    "box": lambda spec, name, mass: add_free_box(spec, name, (0.025, 0.025, 0.025), mass),
+    "ball": lambda spec, name, mass: add_sphere(spec, name, 0.03, mass),
+    "cylinder": lambda spec, name, mass: add_cylinder(spec, name, 0.025, 0.035, mass),
+    "capsule": lambda spec, name, mass: add_capsule(spec, name, 0.02, 0.03, mass),
+    "prism": lambda spec, name, mass: add_free_box(spec, name, (0.02, 0.045, 0.02), mass,
+                                                   (0.1, 0.7, 0.6, 1.0)),
 }
 
 
 def add_primitive_set(spec: mujoco.MjSpec, names: Sequence[str],
                       mass: float = 0.08) -> dict[str, ObjectInfo]:
-    """The candidate shapes of GraspTwoItems, each a free object."""
-    out = {}
-    for name in names:
-        kind, size, rgba = PRIMITIVE_SHAPES[name]
-        body = free_body(spec, name)
-        add_geom(body, f"{name}/geom", kind, size, rgba, mass)
-        rest = size[0] + size[1] if kind == "capsule" else size[-1]
-        footprint = float(np.hypot(size[0], size[1]) if kind == "box" else size[0])
-        out[name] = ObjectInfo(name, name, f"{name}/free", False, rest, footprint)
-    return out
+    """The candidate shapes of GraspTwoItems (keys of PRIMITIVE_SHAPES), each free."""
+    return {name: PRIMITIVE_SHAPES[name](spec, name, mass) for name in names}
 
 
 def add_tray(spec: mujoco.MjSpec, name: str, size: tuple[float, float] = (0.20, 0.14),
              mass: float = 0.5, rim: float = 0.025) -> ObjectInfo:
-    """A flat tray with a low rim; lifted from its two short sides."""
+    """A flat tray (half extents `size`) with a low rim, lifted by its two short sides.
+
+    Points `grip_xpos` / `grip_xneg` are the middles of the short (+x / -x) rim walls.
+    """
     body = free_body(spec, name)
     hx, hy, t = size[0], size[1], 0.006
     color = (0.55, 0.4, 0.3, 1)
@@ -155,13 +194,26 @@ def add_tray(spec: mujoco.MjSpec, name: str, size: tuple[float, float] = (0.20, 
                                           (0, hy, hx, t), (0, -hy, hx, t))):
         add_geom(body, f"{name}/rim{i}", "box", [sx, sy, rim / 2], color, 0.1 * mass,
                  pos=[px, py, 2 * t + rim / 2])
-    return ObjectInfo(name, name, f"{name}/free", False, 0.0, float((hx**2 + hy**2) ** 0.5),
-                      axes={"up": (name, (0.0, 0.0, 1.0))})
+    grip_z = 2 * t + rim / 2
+    return ObjectInfo(name, name, f"{name}/free", False, 0.0, float(math.hypot(hx, hy)),
+                      points={"grip_xpos": (name, (hx, 0.0, grip_z)),
+                              "grip_xneg": (name, (-hx, 0.0, grip_z))},
+                      axes={"up": (name, UP)})
 
 
-# PushT footprint: (centre x, centre y, half x, half y) in the T's body frame.
+# PushT footprint: (centre x, centre y, half x, half y) in the T's body frame: a 0.20 x 0.05
+# bar on top of a 0.05 x 0.15 stem, 0.03 thick.
 T_SHAPE_RECTS = ((0.0, 0.075, 0.10, 0.025), (0.0, -0.025, 0.025, 0.075))
 T_THICKNESS = 0.015  # half height
+
+
+def t_shape_polygons(rects: Sequence[Sequence[float]] = T_SHAPE_RECTS) -> list[np.ndarray]:
+    """The T's footprint as (4, 2) counter-clockwise polygons in its body frame.
+
+    The pieces do not overlap, so the footprint area is the sum of theirs.
+    """
+    signs = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
+    return [np.array([cx, cy]) + signs * [hx, hy] for cx, cy, hx, hy in rects]
 
 
 def add_t_shape(spec: mujoco.MjSpec, name: str, mass: float = 0.2,
@@ -170,46 +222,81 @@ def add_t_shape(spec: mujoco.MjSpec, name: str, mass: float = 0.2,
     body = mocap_body(spec, name) if visual_only else free_body(spec, name)
     h = 0.001 if visual_only else T_THICKNESS
     rgba = (0.2, 0.8, 0.3, 0.4) if visual_only else (0.85, 0.3, 0.25, 1)
+    areas = [hx * hy for _, _, hx, hy in T_SHAPE_RECTS]
     for i, (cx, cy, hx, hy) in enumerate(T_SHAPE_RECTS):
         kw = {"contype": 0, "conaffinity": 0, "group": 2} if visual_only else {}
         add_geom(body, f"{name}/part{i}", "box", [hx, hy, h], rgba,
-                 None if visual_only else mass / 2, pos=[cx, cy, 0], **kw)
+                 None if visual_only else mass * areas[i] / sum(areas), pos=[cx, cy, 0], **kw)
+    reach = max(float(np.linalg.norm(p, axis=1).max()) for p in t_shape_polygons())
     return ObjectInfo(name, name, None if visual_only else f"{name}/free", visual_only, h,
-                      0.11)
+                      reach)
 
 
-def add_peg(spec: mujoco.MjSpec, name: str, radius: float = 0.015, length: float = 0.12,
-            mass: float = 0.08) -> ObjectInfo:
-    """A cylindrical peg lying on the table along its x axis; `head` is its +x end."""
+def add_peg(spec: mujoco.MjSpec, name: str, radius: float = 0.02, length: float = 0.12,
+            mass: float = 0.1, grip_length: float = 0.03) -> ObjectInfo:
+    """A cylindrical peg lying along its x axis, with a square grip block at its -x end.
+
+    Point `head` is the +x end, the one inserted; `grip` the middle of the block, which
+    is wider than the shaft (so it stops insertion) and flat-bottomed (so the peg does
+    not roll). Axis `shaft` points from grip to head.
+    """
     body = free_body(spec, name)
     add_geom(body, f"{name}/shaft", "cylinder", [radius, length / 2], (0.9, 0.6, 0.1, 1),
-             mass, quat=[0.7071068, 0, 0.7071068, 0])
-    return ObjectInfo(name, name, f"{name}/free", False, radius, length / 2,
-                      points={"head": (name, (length / 2, 0.0, 0.0))},
+             0.75 * mass, quat=ALONG_X)
+    grip = (-length / 2 - grip_length / 2, 0.0, 0.0)
+    add_geom(body, f"{name}/grip", "box", [grip_length / 2, radius + 0.01, radius],
+             (0.3, 0.3, 0.35, 1), 0.25 * mass, pos=list(grip))
+    return ObjectInfo(name, name, f"{name}/free", False, radius, length / 2 + grip_length,
+                      points={"head": (name, (length / 2, 0.0, 0.0)), "grip": (name, grip)},
                       axes={"shaft": (name, (1.0, 0.0, 0.0))})
 
 
-def add_hole_block(spec: mujoco.MjSpec, name: str, bore_radius: float = 0.023,
-                   depth: float = 0.06, height: float = 0.12) -> ObjectInfo:
-    """A fixed block with a horizontal square-section bore along its local -x axis.
+def _frame_quat(x: np.ndarray, z: np.ndarray) -> list[float]:
+    """Quaternion of the right-handed frame with unit axes x and z."""
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.column_stack([x, np.cross(z, x), z]).ravel())
+    return quat.tolist()
 
-    The bore opens on the -x face (towards the robot when unrotated); `target` is the
-    point a fully inserted peg head reaches, `bore` the axis pointing out of the hole.
+
+def add_hole_block(spec: mujoco.MjSpec, name: str, bore_radius: float = 0.023,
+                   depth: float = 0.06, vertical: bool = False, axis_height: float = 0.08,
+                   wall: float = 0.02, staves: int = 16) -> ObjectInfo:
+    """A fixed (mocap) block with a round blind hole, built from convex pieces.
+
+    The bore is a ring of `staves` boxes whose inner faces circumscribe `bore_radius`,
+    closed at the far end by a cap. Horizontal (default): the bore runs along x at
+    `axis_height` on a pedestal and opens on the -x face (towards the robot when
+    unrotated). Vertical: the block stands on the table and the bore opens upwards.
+    Points: `entrance` (centre of the opening), `target` (where a fully inserted peg head
+    ends, 5 mm short of the bottom); axis `bore` points out of the hole.
     """
     body = mocap_body(spec, name)
-    wall, half_w = 0.03, bore_radius + 0.03
-    zc = height / 2
     color = (0.45, 0.45, 0.5, 1)
-    add_geom(body, f"{name}/top", "box", [depth / 2, half_w, (zc - bore_radius) / 2],
-             color, pos=[0, 0, zc + bore_radius + (zc - bore_radius) / 2])
-    add_geom(body, f"{name}/bottom", "box", [depth / 2, half_w, (zc - bore_radius) / 2],
-             color, pos=[0, 0, (zc - bore_radius) / 2])
-    for i, sy in enumerate((1, -1)):
-        add_geom(body, f"{name}/side{i}", "box", [depth / 2, wall / 2, bore_radius], color,
-                 pos=[0, sy * (bore_radius + wall / 2), zc])
-    add_geom(body, f"{name}/back", "box", [0.01, half_w, zc], color,
-             pos=[depth / 2 + 0.01, 0, zc])
-    target = (depth / 2 - 0.005, 0.0, zc)
-    return ObjectInfo(name, name, None, True, 0.0, 0.07,
-                      points={"target": (name, target), "entrance": (name, (-depth / 2, 0, zc))},
-                      axes={"bore": (name, (-1.0, 0.0, 0.0))})
+    cap = 0.015
+    if vertical:
+        out, bottom = np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, cap])
+        e1 = np.array([1.0, 0.0, 0.0])
+    else:
+        out, bottom = np.array([-1.0, 0.0, 0.0]), np.array([depth / 2, 0.0, axis_height])
+        e1 = np.array([0.0, 0.0, 1.0])
+        stand = axis_height - bore_radius
+        add_geom(body, f"{name}/pedestal", "box", [depth / 2 + cap / 2, bore_radius + wall,
+                                                   stand / 2], color,
+                 pos=[cap / 2, 0, stand / 2])
+    e2 = np.cross(out, e1)
+    half_w = (bore_radius + wall) * math.tan(math.pi / staves)
+    for k in range(staves):
+        phi = 2 * math.pi * k / staves
+        radial = math.cos(phi) * e1 + math.sin(phi) * e2
+        pos = bottom + out * depth / 2 + radial * (bore_radius + wall / 2)
+        add_geom(body, f"{name}/stave{k}", "box", [wall / 2, half_w, depth / 2], color,
+                 pos=pos.tolist(), quat=_frame_quat(radial, out))
+    cap_r = (bore_radius + wall) / math.cos(math.pi / staves)
+    add_geom(body, f"{name}/cap", "cylinder", [cap_r, cap / 2], color,
+             pos=(bottom - out * cap / 2).tolist(), quat=_frame_quat(e1, out))
+    reach = cap_r if vertical else math.hypot(depth / 2 + cap, cap_r)
+    entrance, target = bottom + out * depth, bottom + out * 0.005
+    return ObjectInfo(name, name, None, True, 0.0, reach,
+                      points={"target": (name, tuple(target.tolist())),
+                              "entrance": (name, tuple(entrance.tolist()))},
+                      axes={"bore": (name, tuple(out.tolist()))})

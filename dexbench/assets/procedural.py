@@ -61,11 +61,15 @@ def add_mug(spec: mujoco.MjSpec, name: str, radius: float = 0.04, height: float 
 def add_jar(spec: mujoco.MjSpec, name: str, radius: float = 0.045, height: float = 0.12,
             wall: float = 0.005, mass: float = 0.3,
             rgba: Sequence[float] = (0.75, 0.5, 0.3, 1.0)) -> ObjectInfo:
-    """An open, lidless jar with a shoulder and a wide neck (80% of the body radius)."""
+    """An open, lidless jar with a shoulder and a wide neck (80% of the body radius).
+
+    Every bend of the wall needs its own ring of convex pieces, so it uses 12 sectors.
+    """
     neck = 0.8 * radius
     profile = [(0.9 * radius, 0.0), (radius, 0.01), (radius, 0.78 * height),
                (neck, 0.88 * height), (neck, height)]
-    add_lathe_object(spec, name, profile, wall, mass, rgba, bottom_thickness=0.008)
+    add_lathe_object(spec, name, profile, wall, mass, rgba, bottom_thickness=0.01,
+                     sectors=12)
     return _open_info(name, neck, height, radius)
 
 

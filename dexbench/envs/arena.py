@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from dexbench.assets.materials import add_material_library
 from dexbench.assets.objects import new_spec
 from dexbench.embodiments.builder import TABLE_TOP_Z
 
@@ -73,6 +74,9 @@ def build_arena(options: PhysicsOptions) -> mujoco.MjSpec:
     # A 1024 shadow map keeps soft-rasterized (EGL/OSMesa) frames ~4x faster than the
     # default 4096 with shadows still readable at policy resolutions.
     spec.visual.quality.shadowsize = 1024
+    spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+                     builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, rgb1=[0.55, 0.65, 0.8],
+                     rgb2=[0.1, 0.1, 0.15], width=256, height=256)
     world = spec.worldbody
     world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[3, 3, 0.05],
                    rgba=[0.55, 0.55, 0.55, 1])
@@ -94,6 +98,7 @@ def build_arena(options: PhysicsOptions) -> mujoco.MjSpec:
     for name, pos, target in CAMERAS:
         world.add_camera(name=name, pos=list(pos), fovy=CAMERA_FOVY,
                          quat=look_at_quat(pos, target))
+    add_material_library(spec)
     return spec
 
 

@@ -11,11 +11,13 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from dexbench.assets.materials import NUM_MATERIALS
 from dexbench.envs.arena import PhysicsOptions
 from dexbench.envs.camera_obs import CameraObservations, default_cameras
 from dexbench.envs.observations import CAMERA_GROUPS, ObservationTerms, resolve_preset
 from dexbench.envs.scene import compose_scene
 from dexbench.envs.task_api import SceneView, Task
+from dexbench.envs.variation import PhysicalVariation, Variation, VisualVariation
 from dexbench.sim.backend import DERIVED_FIELDS, STATE_FIELDS
 from dexbench.sim.factory import make_backend, make_renderer
 
@@ -52,6 +54,8 @@ class DexEnv:
         cameras: tuple[str, ...] | list[str] | None = None,
         image_size: tuple[int, int] = (256, 256),
         num_points: int = 512,
+        visual: VisualVariation | None = None,
+        physical: PhysicalVariation | None = None,
     ) -> None:
         if num_envs < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
@@ -73,6 +77,10 @@ class DexEnv:
         sites = [s for side in self.embodiment.sides.values() for s in side.fingertip_sites]
         palms = [side.palm_site for side in self.embodiment.sides.values()]
         self.view = SceneView(model, fields, sites, palms, self.scene.hand_geoms)
+        model_materials = [model.material(f"var/mat{i}").id for i in range(NUM_MATERIALS)]
+        self.variation = Variation(self.scene, self.sim, model_materials,
+                                   visual or VisualVariation(), physical or PhysicalVariation())
+        self._noise = torch.Generator(device=self.device).manual_seed(seed)
         preset = resolve_preset(obs)
         self.groups = tuple(g for g in preset.groups if g not in CAMERA_GROUPS)
         self.history = preset.history if history is None else history
@@ -114,9 +122,10 @@ class DexEnv:
         self.seed = seed
         self._episode[:] = 0
 
-    def _rngs(self, env_ids: np.ndarray) -> list[np.random.Generator]:
-        # One stream per (seed, env, episode): resets of some envs never shift others'.
-        return [np.random.default_rng([self.seed, int(i), int(self._episode[i])])
+    def _rngs(self, env_ids: np.ndarray, stream: int = 0) -> list[np.random.Generator]:
+        # One stream per (seed, env, episode, purpose): resets of some envs never shift
+        # others', and switching variation on never changes the task's samples.
+        return [np.random.default_rng([self.seed, int(i), int(self._episode[i]), stream])
                 for i in env_ids]
 
     def reset(self, env_ids: torch.Tensor | np.ndarray | list[int] | None = None) -> Obs:
@@ -153,6 +162,7 @@ class DexEnv:
                 self.view.goal = torch.zeros(self.num_envs, goal.shape[1], dtype=goal.dtype,
                                              device=self.device)
             self.view.goal[dev_ids] = goal
+        self.variation.apply(ids.numpy(), self._rngs(ids.numpy(), stream=1))
         self.sim.forward(ids)
         for body, initial in self.view.initial_body_pos.items():
             initial[dev_ids] = self.view.body_pos(body)[dev_ids]
@@ -200,8 +210,12 @@ class DexEnv:
 
     def _observe(self, reset_ids: torch.Tensor | None = None) -> Obs:
         out: Obs = {}
+        noise = self.variation.physical.obs_noise if self.variation.physical.enabled else 0.0
         for group in self.groups:
             value = self._terms.compute(group, self.last_action)
+            if value is not None and noise > 0 and group in ("proprio", "state"):
+                value = value + noise * torch.randn(value.shape, generator=self._noise,
+                                                    device=self.device)
             if value is not None:
                 out[group] = value
         if self.cameras is not None:

@@ -28,6 +28,12 @@ class SimBackend(Protocol):
     def field(self, name: str) -> torch.Tensor:
         """A live (num_envs, ...) view of a state or derived field."""
 
+    def model_field(self, name: str) -> torch.Tensor:
+        """Writable per-world values (num_envs, ...) of a model field (variation)."""
+
+    def set_const(self, env_ids) -> None:
+        """Recompute derived model constants of those worlds after editing fields."""
+
     def warning_counts(self) -> torch.Tensor:
         """(num_envs,) simulator warnings per world since its last reset; never silent."""
 

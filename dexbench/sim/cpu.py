@@ -36,6 +36,7 @@ class CpuBackend:
         for name in (*STATE_FIELDS, *DERIVED_FIELDS):
             self._fields[name] = self._as_tensor(self.batch.bind(name))
         self._state = self._as_tensor(self.batch.state)
+        self.per_world_model = False  # set once any model field gets per-world values
 
     @staticmethod
     def _as_tensor(array: np.ndarray) -> torch.Tensor:
@@ -54,6 +55,19 @@ class CpuBackend:
             return self._fields[name]
         except KeyError:
             raise KeyError(f"unknown field {name!r}; have {sorted(self._fields)}") from None
+
+    def model_field(self, name: str) -> torch.Tensor:
+        """A writable (num_envs, ...) view of per-world values of a model field."""
+        self.per_world_model = True
+        return torch.from_numpy(self.batch.expand(name))
+
+    def set_const(self, env_ids) -> None:
+        """Recompute model constants (e.g. subtree masses) after per-world edits."""
+        self.batch.set_const(ids=np.asarray(env_ids))
+
+    def world_model(self, env: int, out: mujoco.MjModel) -> mujoco.MjModel:
+        """World `env`'s model (shared assets, its own per-world fields), into `out`."""
+        return self.batch.get_model(env, out) if self.per_world_model else self.model
 
     def warning_counts(self) -> torch.Tensor:
         """(num_envs,) MuJoCo warnings (contact/constraint overflow, instability) so far."""

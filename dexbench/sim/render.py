@@ -1,13 +1,15 @@
 """CPU rendering: `mujoco.Renderer` (EGL or OSMesa, headless) over the CPU backend.
 
-Each environment's state is copied into one scratch MjData (`Batch.get_data`) and
-rendered from each camera. RGB is uint8, depth is metres along the camera axis
-(distance to the image plane); camera poses come back with the images so depth can be
-turned into world points.
+Each environment's state is copied into one scratch MjData (`Batch.get_data`) and,
+when visual variation gives worlds their own colours, lights or cameras, its model into
+one scratch MjModel; the scene is then rendered from each camera. RGB is uint8, depth
+is metres along the camera axis (distance to the image plane); camera poses come back
+with the images so depth can be turned into world points.
 """
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import mujoco
@@ -42,7 +44,10 @@ class CpuRenderer:
                 "need MUJOCO_GL=egl (libEGL) or MUJOCO_GL=osmesa set before mujoco is "
                 "first imported (importing dexbench first sets egl by default)") from None
         self._data = mujoco.MjData(self._model)
-
+        self._world_model = copy.copy(self._model)  # scratch for per-world fields
+        self._option = mujoco.MjvOption()
+        self._camera = mujoco.MjvCamera()
+        self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
     def fovy(self, camera: str) -> float:
         """Vertical field of view (degrees) of a camera."""
         return float(self._model.cam_fovy[self._model.camera(camera).id])
@@ -58,10 +63,13 @@ class CpuRenderer:
         r = self._renderer
         for env in range(n):
             self._backend.batch.get_data(env, self._data)
+            model = self._backend.world_model(env, self._world_model)
             for k, cam in enumerate(ids):
                 pos[k, env] = self._data.cam_xpos[cam]
                 mat[k, env] = self._data.cam_xmat[cam].reshape(3, 3)
-                r.update_scene(self._data, camera=cam)
+                self._camera.fixedcamid = cam
+                mujoco.mjv_updateScene(model, self._data, self._option, None, self._camera,
+                                       mujoco.mjtCatBit.mjCAT_ALL.value, r.scene)
                 if rgb:
                     out_rgb[k, env] = r.render()
                 if depth:
