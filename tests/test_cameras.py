@@ -82,7 +82,7 @@ def test_depth_points_of_the_cube_lie_on_its_surface():
     quat = env.view.body_quat("cube").numpy()
     checked = 0
     for cam, f in frames.items():
-        pts = depth_to_world(f.depth, env.cameras._renderer.fovy(cam), f.cam_pos, f.cam_mat)
+        pts = depth_to_world(f.depth, f.fovy, f.cam_pos, f.cam_mat)
         pts = pts.numpy()
         for e in range(2):
             # near the cube and above the table top (which the cube stands on)
@@ -156,3 +156,17 @@ def test_physical_variation_scales_within_ranges():
     cube = model.body("cube").id
     ratio = mass[:, cube] / model.body_mass[cube]
     assert ((ratio >= 0.7) & (ratio <= 1.3)).all() and len(set(ratio.tolist())) == 3
+
+
+def test_varied_field_of_view_still_reconstructs_the_table_plane():
+    from dexbench.envs.variation import VisualVariation
+    env = make_env("PickCube", num_envs=3, obs=["depth"], image_size=(64, 64),
+                   visual=VisualVariation(enabled=True, fov_jitter_deg=8.0))
+    env.reset()
+    f = env.cameras._renderer.render(["front"], rgb=False, depth=True)["front"]
+    assert len(set(f.fovy.tolist())) == 3
+    pts = depth_to_world(f.depth, f.fovy, f.cam_pos, f.cam_mat)
+    z = pts[..., 2]
+    table = (pts[..., 0].abs() < 0.2) & (pts[..., 1].abs() < 0.5) & (z > 0.55) & (z < 0.605)
+    assert table.sum() > 100
+    assert (pts[..., 2][table] - TABLE_TOP_Z).abs().max() < 0.003

@@ -78,3 +78,14 @@ def test_bench_render_reports_images_per_second():
     result = bench_render(["num_envs=2", "steps=2", "width=32", "height=32"])
     assert result["images_per_s"] > 0 and result["resolution"] == [32, 32]
     assert result["num_envs"] == 2 and "CpuRenderer" in result["renderer"]
+
+
+def test_snapshot_writes_a_contact_sheet():
+    from PIL import Image
+
+    from dexbench.cli.snapshot import snapshot
+
+    path = pathlib.Path(snapshot(["task=PickCube", "visual=train", "num_envs=2",
+                                  "camera.width=40", "camera.height=30"]))
+    image = Image.open(path)
+    assert image.size == (40 * 6, 30 * 2)  # 3 views + wrist + depth + cloud, 2 envs

@@ -17,12 +17,17 @@ from dexbench.assets.objects import ObjectInfo, add_geom, free_body, mocap_body
 GREY = (0.5, 0.5, 0.55, 1.0)
 DARK = (0.2, 0.2, 0.22, 1.0)
 ACCENT = (0.85, 0.35, 0.15, 1.0)
+# Friction loss is a soft constraint: with MuJoCo's default impedance (0.9) a joint held
+# only by friction creeps under a steady load (a laptop lid sags ~4 deg/s). Near-hard
+# impedance makes it hold like dry friction.
+HOLD = [0.999, 0.999, 0.001, 0.5, 2.0]
 
 
 def _hinge(body: mujoco.MjsBody, name: str, axis: Sequence[float], lo: float, hi: float,
            damping: float, friction: float) -> str:
     body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(axis),
-                   range=[lo, hi], damping=damping, frictionloss=friction, armature=1e-3)
+                   range=[lo, hi], damping=damping, frictionloss=friction, armature=1e-3,
+                   solimp_friction=HOLD)
     return name
 
 
@@ -76,7 +81,7 @@ def add_faucet(spec: mujoco.MjSpec, name: str, turn: float = math.radians(120)) 
     add_geom(lever, f"{name}/hub", "cylinder", [0.02, 0.012], DARK, 0.03)
     add_geom(lever, f"{name}/lever", "capsule", [0.01, 0.04], ACCENT, 0.03,
              pos=[-0.04, 0, 0.015], quat=[0.7071068, 0, 0.7071068, 0])
-    return ObjectInfo(name, name, None, True, 0.0, 0.09, joints={joint: (0.0, turn)},
+    return ObjectInfo(name, name, None, True, 0.0, 0.132, joints={joint: (0.0, turn)},
                       points={"handle_tip": (f"{name}/handle", (-0.08, 0.0, 0.015))})
 
 
@@ -98,7 +103,8 @@ def add_drawer_cabinet(spec: mujoco.MjSpec, name: str, travel: float = 0.25,
         add_geom(base, f"{name}/{part}", "box", half, GREY, pos=pos)
     drawer = base.add_body(name=f"{name}/drawer", pos=[0, 0, hz])
     drawer.add_joint(name=f"{name}/drawer", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                     range=[0.0, travel], damping=5.0, frictionloss=0.5, armature=0.01)
+                     range=[0.0, travel], damping=5.0, frictionloss=0.5, armature=0.01,
+                     solimp_friction=HOLD)
     dx, dy, dz = hx - 2 * t, hy - 2.5 * t, hz - 2.5 * t
     for part, half, pos in (("bottom", (dx, dy, t / 2), (0, 0, -dz)),
                             ("front", (t, dy + t, dz), (hx - t, 0, 0)),
@@ -158,7 +164,8 @@ def add_coffee_machine(spec: mujoco.MjSpec, name: str,
     joint = _hinge(lever, f"{name}/lever", (0, 1, 0), 0.0, lever_turn, 0.05, 0.03)
     add_geom(lever, f"{name}/lever", "capsule", [0.008, 0.04], ACCENT, 0.03,
              pos=[0.04, 0.012, 0], quat=[0.7071068, 0, 0.7071068, 0])
-    return ObjectInfo(name, name, None, True, 0.0, 0.16, joints={joint: (0.0, lever_turn)},
+    return ObjectInfo(name, name, None, True, 0.0, math.hypot(0.15, 0.10),
+                      joints={joint: (0.0, lever_turn)},
                       points={"cup_spot": (name, (0.09, 0.0, 0.012)),
                               "spout": (name, (0.09, 0.0, 0.23)),
                               "lever_tip": (f"{name}/lever", (0.08, 0.012, 0.0))})

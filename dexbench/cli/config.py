@@ -19,6 +19,7 @@ from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from dexbench.envs.arena import PhysicsOptions
+from dexbench.envs.variation import PhysicalVariation, VisualVariation
 
 CONF_DIR = pathlib.Path(__file__).resolve().parents[2] / "conf"
 
@@ -46,9 +47,16 @@ def env_kwargs(cfg: DictConfig) -> dict:
     physics = PhysicsOptions(timestep=float(cfg.sim.timestep),
                              control_hz=float(cfg.sim.control_hz))
     obs = cfg.obs if isinstance(cfg.obs, str) else list(cfg.obs)
+    cam = cfg.camera
     return dict(task=cfg.task, embodiment=cfg.embodiment, num_envs=int(cfg.num_envs),
                 seed=int(cfg.seed), obs=obs, backend=cfg.sim.backend,
-                nthread=int(cfg.sim.nthread), physics=physics)
+                nthread=int(cfg.sim.nthread), physics=physics,
+                cameras=list(cam.names) if cam.names else None,
+                image_size=(int(cam.width), int(cam.height)), num_points=int(cam.num_points),
+                visual=VisualVariation(**OmegaConf.to_container(cfg.visual)),
+                physical=PhysicalVariation(**{
+                    k: tuple(v) if isinstance(v, list) else v
+                    for k, v in OmegaConf.to_container(cfg.physical).items()}))
 
 
 def runs_root() -> pathlib.Path:

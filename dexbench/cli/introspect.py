@@ -7,6 +7,7 @@ import sys
 
 from dexbench.cli.config import env_kwargs, load_config
 from dexbench.cli.docs import write_docs
+from dexbench.cli.snapshot import snapshot
 from dexbench.embodiments.builder import embodiment_names, parse_embodiment
 from dexbench.tasks.registry import TASKS, make_env
 
@@ -14,7 +15,8 @@ USAGE = """usage:
   python -m dexbench list tasks
   python -m dexbench list embodiments
   python -m dexbench inspect task=<Task> embodiment=<embodiment> [obs=<preset>]
-  python -m dexbench docs             (regenerates docs/tasks.md)"""
+  python -m dexbench docs             (regenerates docs/tasks.md)
+  python -m dexbench snapshot task=<Task> embodiment=<embodiment> visual=<fixed|train|test>"""
 
 
 def list_tasks() -> str:
@@ -63,6 +65,8 @@ def main(argv: list[str]) -> int:
         print(list_embodiments())
     elif argv[:1] == ["inspect"]:
         print(inspect(argv[1:]))
+    elif argv[:1] == ["snapshot"]:
+        print(f"wrote {snapshot(argv[1:])}")
     elif argv == ["docs"]:
         print(f"wrote {write_docs()}")
     else:

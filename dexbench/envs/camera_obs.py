@@ -49,8 +49,8 @@ class CameraObservations:
             if "depth" in self.groups:
                 out[f"depth/{cam}"] = f.depth
         if "pointcloud" in self.groups:
-            clouds = [depth_to_world(frames[c].depth, self._renderer.fovy(c),
-                                     frames[c].cam_pos, frames[c].cam_mat)
+            clouds = [depth_to_world(frames[c].depth, frames[c].fovy, frames[c].cam_pos,
+                                     frames[c].cam_mat)
                       for c in self.cloud_cameras]
             points = torch.cat(clouds, dim=1)
             cloud = sample_cloud(points, crop_mask(points, CROP_LO, CROP_HI), self.num_points)

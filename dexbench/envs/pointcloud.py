@@ -7,21 +7,22 @@ vertical field of view and square pixels fix the intrinsics.
 
 from __future__ import annotations
 
-import math
-
 import torch
 
 
-def depth_to_world(depth: torch.Tensor, fovy_deg: float, cam_pos: torch.Tensor,
+def depth_to_world(depth: torch.Tensor, fovy_deg: torch.Tensor, cam_pos: torch.Tensor,
                    cam_mat: torch.Tensor) -> torch.Tensor:
-    """(N, H*W, 3) world points of depth images (N, H, W) (distance to image plane)."""
+    """(N, H*W, 3) world points of depth images (N, H, W) (distance to image plane).
+
+    `fovy_deg` is (N,): each world may have its own field of view.
+    """
     n, h, w = depth.shape
-    f = 0.5 * h / math.tan(math.radians(fovy_deg) / 2)
     dtype, device = cam_pos.dtype, depth.device
-    u = (torch.arange(w, dtype=dtype, device=device) + 0.5 - w / 2) / f
-    v = (torch.arange(h, dtype=dtype, device=device) + 0.5 - h / 2) / f
+    f = (0.5 * h / torch.tan(torch.deg2rad(fovy_deg.to(dtype)) / 2))[:, None, None]
+    u = torch.arange(w, dtype=dtype, device=device) + 0.5 - w / 2
+    v = torch.arange(h, dtype=dtype, device=device) + 0.5 - h / 2
     d = depth.to(dtype)
-    local = torch.stack([u[None, None, :] * d, -v[None, :, None] * d, -d], dim=-1)
+    local = torch.stack([u[None, None, :] * d / f, -v[None, :, None] * d / f, -d], dim=-1)
     world = local.reshape(n, -1, 3) @ cam_mat.to(dtype).transpose(1, 2)
     return world + cam_pos.to(dtype)[:, None]
 

@@ -27,6 +27,7 @@ class CameraFrames:
     depth: torch.Tensor | None  # (N, H, W) float32, metres
     cam_pos: torch.Tensor  # (N, 3) float64, world
     cam_mat: torch.Tensor  # (N, 3, 3) float64, camera axes as columns (looks along -z)
+    fovy: torch.Tensor  # (N,) vertical field of view, degrees (varies per world)
 
 
 class CpuRenderer:
@@ -48,10 +49,6 @@ class CpuRenderer:
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
-    def fovy(self, camera: str) -> float:
-        """Vertical field of view (degrees) of a camera."""
-        return float(self._model.cam_fovy[self._model.camera(camera).id])
-
     def render(self, cameras: list[str], rgb: bool, depth: bool) -> dict[str, CameraFrames]:
         n, model = self._backend.num_envs, self._model
         h, w = self.height, self.width
@@ -60,6 +57,7 @@ class CpuRenderer:
         out_depth = np.zeros((len(cameras), n, h, w), np.float32) if depth else None
         pos = np.zeros((len(cameras), n, 3))
         mat = np.zeros((len(cameras), n, 3, 3))
+        fovy = np.zeros((len(cameras), n))
         r = self._renderer
         for env in range(n):
             self._backend.batch.get_data(env, self._data)
@@ -67,6 +65,7 @@ class CpuRenderer:
             for k, cam in enumerate(ids):
                 pos[k, env] = self._data.cam_xpos[cam]
                 mat[k, env] = self._data.cam_xmat[cam].reshape(3, 3)
+                fovy[k, env] = model.cam_fovy[cam]
                 self._camera.fixedcamid = cam
                 mujoco.mjv_updateScene(model, self._data, self._option, None, self._camera,
                                        mujoco.mjtCatBit.mjCAT_ALL.value, r.scene)
@@ -80,7 +79,7 @@ class CpuRenderer:
             cam: CameraFrames(
                 torch.from_numpy(out_rgb[k]) if rgb else None,
                 torch.from_numpy(out_depth[k]) if depth else None,
-                torch.from_numpy(pos[k]), torch.from_numpy(mat[k]))
+                torch.from_numpy(pos[k]), torch.from_numpy(mat[k]), torch.from_numpy(fovy[k]))
             for k, cam in enumerate(cameras)
         }
 
