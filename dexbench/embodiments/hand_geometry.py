@@ -1,10 +1,11 @@
 """Facts about a hand derived from its model, so no hand needs hand-tuned mount poses.
 
-The *hand frame* H has its origin at the palm body, x along the fingers (palm towards
-the mean non-thumb fingertip with the hand open) and z along the palm normal (the way
-the fingers curl when the hand closes). Every mount places H, not the model's root, so
-"palm down, fingers forward" means the same thing for all six hands. Everything here is
-expressed in the hand file's world frame, which is what `MjSpec.attach` places.
+The *hand frame* H has its origin at the palm body, x along the fingers (from the mean
+non-thumb knuckle to the mean non-thumb fingertip, hand open: knuckles rather than the
+palm origin, which some models place far off the fingers' line) and z along the palm
+normal (the way the fingers curl when the hand closes). Every mount places H, not the
+model's root, so "palm down, fingers forward" means the same thing for all six hands.
+Everything here is in the hand file's world frame, which is what `MjSpec.attach` places.
 """
 
 from __future__ import annotations
@@ -92,11 +93,12 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
     }
     palm_pos = data.xpos[palm].copy()
     open_tips = data.xipos[tips[1:]].mean(axis=0)
+    knuckles = data.xpos[[_knuckle(model, t, palm) for t in tips[1:]]].mean(axis=0)
     geom_corners = _geom_corners(model, data)
     _settle(model, data, synergies["power"])
     closed_tips = data.xipos[tips[1:]].mean(axis=0)
 
-    x = open_tips - palm_pos
+    x = open_tips - knuckles
     x /= np.linalg.norm(x)
     curl = closed_tips - open_tips
     z = curl - curl.dot(x) * x
@@ -120,6 +122,13 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
         synergies=synergies,
         open_qpos=open_qpos,
     )
+
+
+def _knuckle(model: mujoco.MjModel, body: int, palm: int) -> int:
+    """The first body of a finger's chain: the ancestor of `body` attached to the palm."""
+    while model.body_parentid[body] not in (palm, 0):
+        body = model.body_parentid[body]
+    return body
 
 
 def _geom_corners(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
