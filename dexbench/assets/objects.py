@@ -126,13 +126,14 @@ def add_capsule(spec: mujoco.MjSpec, name: str, radius: float = 0.02,
                       axes={"long": (name, (1.0, 0.0, 0.0))})
 
 
-def add_stick(spec: mujoco.MjSpec, name: str, length: float = 0.25, radius: float = 0.015,
+def add_stick(spec: mujoco.MjSpec, name: str, length: float = 0.15, radius: float = 0.015,
               mass: float = 0.1, upright: bool = True,
               foot_radius: float = 0.035) -> ObjectInfo:
     """A stick, by default standing upright on a flat foot (40% of its mass).
 
     PickUpStick needs the stick within 30 deg of vertical while lifted, so it starts
-    upright; the foot keeps it standing (it tips only past ~20 deg). `upright=False`
+    upright; the foot keeps it standing. 0.15 m long by default, so its top (0.162 m)
+    stays below a hand hovering 0.2 m above the table at reset. `upright=False`
     gives a footless capsule lying along x instead, which a hand must lift and turn.
     Axis `up` is the stick's length direction, the one that should point up when held;
     point `top` is its upper end when upright.
