@@ -12,29 +12,23 @@ import torch
 from dexbench.assets import articulated, objects, procedural
 from dexbench.assets.objects import ObjectInfo, add_free_box
 from dexbench.envs.task_api import SceneView
-from dexbench.tasks.predicates import dist, progress, tilt_deg, xy_dist
-from dexbench.tasks.templates import Placement, TabletopTask, uniform_points
+from dexbench.tasks.predicates import dist, progress, xy_dist
+from dexbench.tasks.templates import LiftTask, Placement, TabletopTask, uniform_points
 
 CENTRE = Placement(x=(-0.10, 0.10), y=(-0.15, 0.15))
 
 
-class PickCube(TabletopTask):
+class PickCube(LiftTask):
     name = "PickCube"
     category = "primitive"
     instruction = "Pick up the cube and lift it above the table."
     description = "Grasp a cube on the tabletop and lift it away from the surface."
     success_text = "The cube is lifted at least 0.20 m above its resetting height."
     placements: ClassVar = {"cube": CENTRE}
-    lift_threshold = 0.20
+    lifted, lift_threshold = "cube", 0.20
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"cube": add_free_box(spec, "cube", [0.025] * 3, 0.1)}
-
-    def success(self, view: SceneView) -> torch.Tensor:
-        return self.lift(view, "cube") >= self.lift_threshold
-
-    def progress(self, view: SceneView) -> torch.Tensor:
-        return self.lift(view, "cube") / self.lift_threshold
 
 
 class StackCube(TabletopTask):
@@ -98,7 +92,7 @@ class RelocateSphere(TabletopTask):
         return 1.0 - dist(view.body_pos("sphere"), view.goal) / 0.4
 
 
-class PickUpStick(TabletopTask):
+class PickUpStick(LiftTask):
     name = "PickUpStick"
     category = "primitive"
     instruction = "Pick up the stick and keep it upright."
@@ -107,22 +101,10 @@ class PickUpStick(TabletopTask):
     success_text = ("The stick is lifted at least 0.20 m above its reset height and stays "
                     "within 30° of vertical.")
     placements: ClassVar = {"stick": CENTRE}
-    lift_threshold, max_tilt = 0.20, 30.0
+    lifted, lift_threshold, max_tilt = "stick", 0.20, 30.0
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"stick": objects.add_stick(spec, "stick")}
-
-    def _tilt(self, view: SceneView) -> torch.Tensor:
-        body, axis = self.objects["stick"].axes["up"]
-        return tilt_deg(view.axis(body, axis))
-
-    def success(self, view: SceneView) -> torch.Tensor:
-        return (self.lift(view, "stick") >= self.lift_threshold) & (
-            self._tilt(view) <= self.max_tilt)
-
-    def progress(self, view: SceneView) -> torch.Tensor:
-        upright = (self._tilt(view) <= self.max_tilt).to(torch.float64)
-        return upright * self.lift(view, "stick") / self.lift_threshold
 
 
 class RelocateObject(TabletopTask):

@@ -21,7 +21,7 @@ import torch
 from dexbench.assets.objects import ObjectInfo
 from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.envs.task_api import ResetSample, SceneView, Task
-from dexbench.tasks.predicates import lift
+from dexbench.tasks.predicates import lift, tilt_deg
 
 MAX_PLACEMENT_TRIES = 200
 
@@ -166,6 +166,27 @@ class TabletopTask(Task):
             if joint in info.joints:
                 return info.joints[joint]
         raise KeyError(joint)
+
+
+class LiftTask(TabletopTask):
+    """Lift object `lifted` at least `lift_threshold` (m) above its reset height,
+    optionally keeping its `up` axis within `max_tilt` degrees of vertical."""
+
+    lifted: ClassVar[str]
+    lift_threshold: ClassVar[float] = 0.20
+    max_tilt: ClassVar[float | None] = None
+
+    def _upright(self, view: SceneView) -> torch.Tensor:
+        if self.max_tilt is None:
+            return torch.ones_like(self.lift(view, self.lifted), dtype=torch.bool)
+        return tilt_deg(view.axis(*self.objects[self.lifted].axes["up"])) <= self.max_tilt
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        return (self.lift(view, self.lifted) >= self.lift_threshold) & self._upright(view)
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        upright = self._upright(view).to(torch.float64)
+        return upright * self.lift(view, self.lifted) / self.lift_threshold
 
 
 ADDON_LIFT = 0.15  # h_addon: one lift threshold for every multi-goal variant (m)
