@@ -34,7 +34,7 @@ ARMS: dict[str, ArmSpec] = {
         name="ur10e",
         collection="universal_robots_ur10e",
         entry="ur10e",
-        seed_qpos=(0.0, -1.6, 1.6, -1.57, -1.57, 0.0),
+        seed_qpos=(2.7, -1.4, 2.4, -1.0, 1.2, -1.57),
         flange_reach=0.55,
     ),
     "xarm7": ArmSpec(

@@ -20,7 +20,7 @@ import numpy as np
 from dexbench.assets.robots import robot_spec
 from dexbench.embodiments.hands import HANDS, SYNERGIES, HandSpec
 
-_SETTLE_STEPS = 400
+_MAX_SETTLE_STEPS = 2000  # 4 s at the 2 ms timestep used here
 
 
 @dataclass(frozen=True)
@@ -60,10 +60,13 @@ def synergy_targets(
 
 
 def _settle(model: mujoco.MjModel, data: mujoco.MjData, ctrl: np.ndarray) -> None:
+    """Drive the hand to `ctrl` from rest until it stops moving (at most 4 s)."""
     mujoco.mj_resetData(model, data)
     data.ctrl[:] = ctrl
-    for _ in range(_SETTLE_STEPS):
+    for step in range(_MAX_SETTLE_STEPS):
         mujoco.mj_step(model, data)
+        if step > 100 and np.abs(data.qvel).max() < 1e-4:
+            break
 
 
 @functools.cache

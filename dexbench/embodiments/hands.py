@@ -35,9 +35,14 @@ class HandSpec:
     collection: str
     sides: dict[str, HandSide]
     synergies: dict[str, dict[str, float]] = field(default_factory=dict)
-    # Distance (m) from the arm flange to the hand root along the finger axis, for hands
-    # whose root sits inside the palm rather than at its base.
-    mount_offset: float = 0.0
+    grasp_offset: tuple[float, float, float] = (0.1, 0.0, 0.05)
+    """Where a 5 cm cube's centre should sit for the `power` synergy to hold it.
+
+    Metres, in the hand frame (x along the fingers, z the palm normal, origin at the palm
+    site). A top-down grasp puts the open hand's palm site at `cube - R_hand @ offset`,
+    closes to `power` and lifts; `tests/test_embodiments.py` checks that this lifts a
+    0.1 kg cube for every hand. Experts use it as the pre-grasp target.
+    """
 
 
 def _shadow_side(p: str) -> HandSide:
@@ -96,17 +101,20 @@ def _wuji_side(side: str) -> HandSide:
 HANDS: dict[str, HandSpec] = {
     "shadow": HandSpec(
         name="shadow",
+        grasp_offset=(0.095, -0.013, 0.06),
         collection="shadow_hand",
         sides={"right": _shadow_side("rh"), "left": _shadow_side("lh")},
         synergies={
             "open": {},
+            # Fingers hook over the cube's far face, the thumb (fully rotated) presses the
+            # near face; tuned for the weak Menagerie finger actuators (kp 1, +-1 Nm).
             "power": {
-                r"A_(FF|MF|RF|LF)J3$": 1.0,
-                r"A_(FF|MF|RF|LF)J0$": 2.0,
-                r"A_THJ5$": 0.6,
-                r"A_THJ4$": 1.2,
-                r"A_THJ2$": 0.4,
-                r"A_THJ1$": 0.8,
+                r"A_(FF|MF|RF|LF)J3$": 0.72,
+                r"A_(FF|MF|RF|LF)J0$": 2.25,
+                r"A_THJ5$": 1.05,
+                r"A_THJ4$": 1.22,
+                r"A_THJ2$": 0.14,
+                r"A_THJ1$": 0.9,
             },
             "pinch": {
                 r"A_FFJ3$": 0.9,
@@ -122,16 +130,22 @@ HANDS: dict[str, HandSpec] = {
     ),
     "allegro": HandSpec(
         name="allegro",
+        grasp_offset=(0.07, -0.002, 0.043),
         collection="wonik_allegro",
         sides={"right": _allegro_side("right_hand"), "left": _allegro_side("left_hand")},
         synergies={
-            "open": {r"tha0$": 0.3},
+            # The open thumb is half turned under the palm so that, closing, it meets the
+            # cube's near face rather than sweeping into its side; the fingers curl at
+            # the middle and distal joints only (knuckles straight) to hook the far face.
+            "open": {r"tha0$": 0.53, r"tha1$": 0.33, r"tha2$": 0.74, r"tha3$": 1.01},
             "power": {
-                r"(ff|mf|rf)a1$": 1.2,
-                r"(ff|mf|rf)a[23]$": 0.9,
-                r"tha0$": 1.3,
-                r"tha1$": 0.5,
-                r"tha[23]$": 0.8,
+                r"(ff|mf|rf)a1$": -0.05,
+                r"(ff|mf|rf)a2$": 1.56,
+                r"(ff|mf|rf)a3$": 1.49,
+                r"tha0$": 1.4,
+                r"tha1$": 0.71,
+                r"tha2$": 1.03,
+                r"tha3$": 1.16,
             },
             "pinch": {
                 r"ffa1$": 1.0,
@@ -143,21 +157,23 @@ HANDS: dict[str, HandSpec] = {
                 r"tha[23]$": 0.6,
             },
         },
-        mount_offset=0.095,
     ),
     "leap": HandSpec(
         name="leap",
+        grasp_offset=(-0.053, 0.031, 0.084),
         collection="leap_hand",
         sides={"right": _leap_side("right_hand"), "left": _leap_side("left_hand")},
         synergies={
             "open": {},
+            # A claw: knuckles flexed past 90 deg with straight-ish fingers hold the far
+            # face while the rotated thumb, tip slightly hyperextended, holds the near one.
             "power": {
-                r"(if|mf|rf)_mcp_act$": 1.2,
-                r"(if|mf|rf)_(pip|dip)_act$": 0.9,
-                r"th_cmc_act$": 1.2,
-                r"th_axl_act$": 1.4,
-                r"th_mcp_act$": 0.4,
-                r"th_ipl_act$": 0.6,
+                r"(if|mf|rf)_mcp_act$": 1.58,
+                r"(if|mf|rf)_(pip|dip)_act$": 0.43,
+                r"th_cmc_act$": 1.76,
+                r"th_axl_act$": 1.38,
+                r"th_mcp_act$": 0.06,
+                r"th_ipl_act$": -1.13,
             },
             "pinch": {
                 r"if_mcp_act$": 1.0,
@@ -173,17 +189,18 @@ HANDS: dict[str, HandSpec] = {
     ),
     "sharpa": HandSpec(
         name="sharpa",
+        grasp_offset=(0.097, -0.001, 0.0675),
         collection="sharpa_wave",
         sides={"right": _sharpa_side("right"), "left": _sharpa_side("left")},
         synergies={
             "open": {},
             "power": {
-                r"_(index|middle|ring|pinky)_MCP_FE_ctrl$": 1.0,
-                r"_(index|middle|ring|pinky)_(PIP|DIP)_ctrl$": 1.0,
-                r"_thumb_CMC_FE_ctrl$": 1.2,
-                r"_thumb_CMC_AA_ctrl$": 0.3,
-                r"_thumb_MCP_FE_ctrl$": 0.5,
-                r"_thumb_IP_ctrl$": 0.6,
+                r"_(index|middle|ring|pinky)_MCP_FE_ctrl$": 0.87,
+                r"_(index|middle|ring|pinky)_(PIP|DIP)_ctrl$": 1.44,
+                r"_thumb_CMC_FE_ctrl$": 0.97,
+                r"_thumb_CMC_AA_ctrl$": -0.26,
+                r"_thumb_MCP_FE_ctrl$": 0.82,
+                r"_thumb_IP_ctrl$": 1.12,
             },
             "pinch": {
                 r"_index_MCP_FE_ctrl$": 0.9,
@@ -199,15 +216,17 @@ HANDS: dict[str, HandSpec] = {
     ),
     "inspire": HandSpec(
         name="inspire",
+        grasp_offset=(0.108, -0.015, 0.049),
         collection="inspire_hand",
         sides={"right": _inspire_side("right"), "left": _inspire_side("left")},
         synergies={
             "open": {},
             "power": {
-                r"(index|middle|ring|pinky)_proximal_drive$": 1.2,
-                r"(index|middle|ring|pinky)_distal_drive$": 1.3,
+                r"(index|middle|ring|pinky)_proximal_drive$": 1.38,
+                r"(index|middle|ring|pinky)_distal_drive$": 0.87,
                 r"thumb_proximal_1_drive$": 1.2,
-                r"thumb_(proximal_2|middle|distal)_drive$": 0.5,
+                r"thumb_proximal_2_drive$": 0.66,
+                r"thumb_(middle|distal)_drive$": 0.0,
             },
             "pinch": {
                 r"index_proximal_drive$": 0.9,
@@ -220,16 +239,19 @@ HANDS: dict[str, HandSpec] = {
     ),
     "wuji": HandSpec(
         name="wuji",
+        grasp_offset=(0.114, -0.01, 0.044),
         collection="wuji_hand",
         sides={"right": _wuji_side("right"), "left": _wuji_side("left")},
         synergies={
             "open": {},
+            # A hook grasp: little knuckle flexion, strongly curled distal joints, so the
+            # weak fingers (forcerange ~0.2-0.6 Nm) press with short lever arms.
             "power": {
-                r"finger[2-5]_joint1_actuator$": 1.1,
-                r"finger[2-5]_joint[34]_actuator$": 1.0,
-                r"finger1_joint1_actuator$": 1.2,
-                r"finger1_joint2_actuator$": 0.6,
-                r"finger1_joint[34]_actuator$": 0.6,
+                r"finger[2-5]_joint1_actuator$": 0.29,
+                r"finger[2-5]_joint[34]_actuator$": 1.2,
+                r"finger1_joint1_actuator$": 1.6,
+                r"finger1_joint2_actuator$": 0.61,
+                r"finger1_joint[34]_actuator$": 1.56,
             },
             "pinch": {
                 r"finger2_joint1_actuator$": 0.9,

@@ -1,0 +1,226 @@
+"""Embodiment tests: all 48 build and hold still, the arms reach, every hand lifts a cube.
+
+Built from the offline robot models (MENAGERIE_ROOT / DEXBENCH_HANDS_ROOT); skipped when
+those are unset. Each scene compiles once per session (`_scene`).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+
+import mujoco
+import numpy as np
+import pytest
+
+from dexbench.assets.objects import add_free_box
+from dexbench.embodiments.builder import (
+    HOME_PALM_ROT,
+    TABLE_TOP_Z,
+    add_embodiment,
+    embodiment_names,
+    parse_embodiment,
+)
+from dexbench.embodiments.hands import HANDS, SYNERGIES
+from dexbench.embodiments.ik import solve_site_pose
+from dexbench.embodiments.layout import Embodiment
+from dexbench.envs.arena import PhysicsOptions, build_arena
+
+pytestmark = pytest.mark.skipif(
+    not (os.environ.get("MENAGERIE_ROOT") and os.environ.get("DEXBENCH_HANDS_ROOT")),
+    reason='offline robot models unset: run eval "$(bash <shared>/assets/unpack.sh)"',
+)
+
+NAMES = embodiment_names()
+ARM_NAMES = [n for n in NAMES if not n.startswith(("bimanual_", "floating_"))]
+CUBE_HALF = 0.025
+CUBE_MASS = 0.1
+
+
+@functools.cache
+def _scene(name: str, cube: bool = False) -> tuple[mujoco.MjModel, Embodiment]:
+    spec = build_arena(PhysicsOptions())
+    plan = add_embodiment(spec, name)
+    if cube:
+        add_free_box(spec, "cube", [CUBE_HALF] * 3, CUBE_MASS)
+    model = spec.compile()
+    return model, Embodiment.resolve(plan, model)
+
+
+def _home_data(model: mujoco.MjModel, emb: Embodiment) -> mujoco.MjData:
+    data = mujoco.MjData(model)
+    for joint, q in emb.home_qpos.items():
+        data.qpos[model.joint(joint).qposadr[0]] = q
+    data.ctrl[:] = emb.poses["home"]
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def _step(model: mujoco.MjModel, data: mujoco.MjData, seconds: float) -> None:
+    for _ in range(round(seconds / model.opt.timestep)):
+        mujoco.mj_step(model, data)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_action_layout_is_consistent(name: str) -> None:
+    model, emb = _scene(name)
+    assert len(emb.actuators) == model.nu == emb.action_dim
+    lo, hi = emb.ctrl_range.T
+    assert np.isfinite(emb.ctrl_range).all() and (lo < hi).all()
+    for pose, vec in emb.poses.items():
+        assert vec.shape == (model.nu,)
+        assert ((vec >= lo - 1e-9) & (vec <= hi + 1e-9)).all(), f"{pose} outside ctrl range"
+    for side, layout in emb.sides.items():
+        assert len(layout.fingertip_sites) >= 4, side
+        assert all(model.site(s).id >= 0 for s in (layout.palm_site, *layout.fingertip_sites))
+    parsed = parse_embodiment(name)
+    if parsed.bimanual:
+        single = _scene(f"{parsed.mount}_{parsed.hand}")[1].actuators
+        assert emb.actuators[: len(single)] == single
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_holds_home_pose(name: str) -> None:
+    """Two seconds at the home action from the home state: nothing falls or drifts."""
+    model, emb = _scene(name)
+    data = _home_data(model, emb)
+    palm0 = {s: data.site(lay.palm_site).xpos.copy() for s, lay in emb.sides.items()}
+    hand_joints = [j for lay in emb.sides.values() for j in lay.hand_joints]
+    qadr = [model.joint(j).qposadr[0] for j in hand_joints]
+    q0 = np.array([emb.home_qpos[j] for j in hand_joints])
+    _step(model, data, 2.0)
+    assert np.isfinite(data.qpos).all()
+    for side, lay in emb.sides.items():
+        drift = np.linalg.norm(data.site(lay.palm_site).xpos - palm0[side])
+        assert drift < 0.01, f"{side} palm drifted {drift * 100:.1f} cm"
+    err = np.abs(data.qpos[qadr] - q0)
+    worst = int(err.argmax())
+    assert err[worst] < 0.05, f"{hand_joints[worst]} moved {err[worst]:.3f} rad from home"
+
+
+@pytest.mark.parametrize("hand", list(HANDS))
+def test_synergies_differ(hand: str) -> None:
+    _, emb = _scene(f"floating_{hand}")
+    is_hand = np.array(["/hand/" in a for a in emb.actuators])
+    poses = {s: emb.poses[s][is_hand] for s in SYNERGIES}
+    for i, a in enumerate(SYNERGIES):
+        for b in SYNERGIES[i + 1:]:
+            assert np.abs(poses[a] - poses[b]).max() > 0.2, f"{a} and {b} barely differ"
+
+
+@pytest.mark.parametrize("name", ARM_NAMES)
+def test_arm_reaches_above_table_centre(name: str) -> None:
+    """Moving only the arm, the index fingertip reaches 10 cm above the table centre,
+    touching nothing on the way there (the IK solution is collision-free)."""
+    model, emb = _scene(name)
+    data = _home_data(model, emb)
+    side = emb.sides["right"]
+    target = np.array([0.0, 0.0, TABLE_TOP_Z + 0.1])
+    tip = side.fingertip_sites[1]
+    solve_site_pose(model, data, tip, list(side.mount_joints), target, iterations=500)
+    mujoco.mj_forward(model, data)
+    assert np.linalg.norm(data.site(tip).xpos - target) < 0.01
+    touching = {tuple(model.body(model.geom_bodyid[g]).name for g in (c.geom1, c.geom2))
+                for c in data.contact[: data.ncon]}
+    assert not touching, f"the reaching arm collides: {sorted(touching)}"
+
+
+def _place_cube(model: mujoco.MjModel, data: mujoco.MjData, hand: str) -> float:
+    """Put the cube on the table where the home palm's grasp offset points; return the
+    palm height that grasps it (the palm only moves vertically)."""
+    offset = HOME_PALM_ROT @ np.asarray(HANDS[hand].grasp_offset)
+    cube = data.site("right/hand/palm").xpos + offset
+    cube[2] = TABLE_TOP_Z + CUBE_HALF
+    adr = model.joint("cube/free").qposadr[0]
+    data.qpos[adr : adr + 7] = [*cube, 1, 0, 0, 0]
+    mujoco.mj_forward(model, data)
+    return float(cube[2] - offset[2])
+
+
+def _grasp_and_lift(model, data, emb, grasp_z, mount_ctrl) -> tuple[float, float]:
+    """Lower the open hand to `grasp_z`, close to `power` over 0.5 s, wait 1 s, raise the
+    palm 15 cm over 1 s and hold 1 s, at the 60 Hz control rate.
+
+    `mount_ctrl(z)` gives (actuator indices, targets) that put the palm at height z.
+    Returns (cube lift, distance from the cube to the mean fingertip).
+    """
+    cube0 = data.body("cube").xpos.copy()
+    z_home = data.site("right/hand/palm").xpos[2]
+    open_, power = emb.poses["open"], emb.poses["power"]
+    hand = np.array(["/hand/" in a for a in emb.actuators])
+    phases = (  # (seconds, palm height from, to, closure from, to)
+        (1.0, z_home, grasp_z, 0, 0), (0.2, grasp_z, grasp_z, 0, 0),
+        (0.5, grasp_z, grasp_z, 0, 1), (1.0, grasp_z, grasp_z, 1, 1),
+        (1.0, grasp_z, grasp_z + 0.15, 1, 1), (1.0, grasp_z + 0.15, grasp_z + 0.15, 1, 1),
+    )
+    decimation = PhysicsOptions().decimation
+    ctrl = open_.copy()
+    for seconds, z0, z1, c0, c1 in phases:
+        n = round(seconds / (decimation * model.opt.timestep))
+        for k in range(1, n + 1):
+            a = k / n
+            closure = c0 + (c1 - c0) * a
+            ctrl[hand] = (open_ + closure * (power - open_))[hand]
+            idx, targets = mount_ctrl(z0 + (z1 - z0) * a)
+            ctrl[idx] = targets
+            data.ctrl[:] = ctrl
+            for _ in range(decimation):
+                mujoco.mj_step(model, data)
+    tips = np.mean([data.site(s).xpos for s in emb.sides["right"].fingertip_sites], axis=0)
+    cube = data.body("cube").xpos
+    return float(cube[2] - cube0[2]), float(np.linalg.norm(tips - cube))
+
+
+def _check_lift(lift: float, spread: float) -> None:
+    assert lift >= 0.10, f"cube rose only {lift * 100:.1f} cm"
+    assert spread < 0.06, f"cube is {spread * 100:.1f} cm from the mean fingertip"
+
+
+LEAP_XFAIL = pytest.mark.xfail(
+    strict=True, reason="LEAP power synergy and grasp_offset were tuned in the old hand "
+    "frame (palm-origin finger axis, 15 deg off); they need re-tuning in the knuckle frame"
+)
+
+
+@pytest.mark.parametrize(
+    "hand", [pytest.param(h, marks=LEAP_XFAIL) if h == "leap" else h for h in HANDS]
+)
+def test_floating_hand_lifts_cube(hand: str) -> None:
+    """Top-down power grasp of a 0.1 kg, 5 cm cube at the hand's `grasp_offset`."""
+    model, emb = _scene(f"floating_{hand}", cube=True)
+    data = _home_data(model, emb)
+    grasp_z = _place_cube(model, data, hand)
+    wrist_z = [emb.actuators.index("right/wrist/z")]
+    z_home = emb.sides["right"].home_palm_pos[2]
+    _check_lift(*_grasp_and_lift(model, data, emb, grasp_z, lambda z: (wrist_z, z - z_home)))
+
+
+FR3_XFAIL = pytest.mark.xfail(
+    strict=True, reason="fr3 home pose sits at its joint-5 limit: the palm cannot rise above "
+    "home height with the hand mounted palm-down, fingers along the flange axis"
+)
+
+
+@pytest.mark.parametrize(
+    "name", ["xarm7_shadow", "ur10e_shadow", pytest.param("fr3_shadow", marks=FR3_XFAIL)]
+)
+def test_arm_hand_lifts_cube(name: str) -> None:
+    """The same grasp on an arm: IK on the arm joints keeps the palm level and moves it."""
+    model, emb = _scene(name, cube=True)
+    data = _home_data(model, emb)
+    grasp_z = _place_cube(model, data, "shadow")
+    side = emb.sides["right"]
+    arm = [i for i, a in enumerate(emb.actuators) if a.startswith("right/arm/")]
+    joints = [model.joint(model.actuator_trnid[i, 0]).name for i in arm]
+    palm_xy = data.site(side.palm_site).xpos[:2].copy()
+    scratch = mujoco.MjData(model)
+    scratch.qpos[:] = data.qpos
+
+    def arm_ctrl(z: float):
+        target = np.array([*palm_xy, z])
+        q, err = solve_site_pose(model, scratch, side.palm_site, joints, target,
+                                 HOME_PALM_ROT, iterations=50)
+        assert err < 2e-3, f"arm IK misses the palm target by {err:.4f}"
+        return arm, q
+
+    _check_lift(*_grasp_and_lift(model, data, emb, grasp_z, arm_ctrl))
