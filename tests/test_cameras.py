@@ -77,7 +77,7 @@ def test_depth_points_of_the_cube_lie_on_its_surface():
     env = make_env("PickCube", num_envs=2, seed=1, obs=["depth"], image_size=(160, 160),
                    cameras=["front", "left"])
     env.reset()
-    frames = env.cameras._renderer.render(["front", "left"], rgb=False, depth=True)
+    frames = env.cameras.renderer.render(["front", "left"], rgb=False, depth=True)
     pos = env.view.body_pos("cube").numpy()
     quat = env.view.body_quat("cube").numpy()
     checked = 0
@@ -163,7 +163,7 @@ def test_varied_field_of_view_still_reconstructs_the_table_plane():
     env = make_env("PickCube", num_envs=3, obs=["depth"], image_size=(64, 64),
                    visual=VisualVariation(enabled=True, fov_jitter_deg=8.0))
     env.reset()
-    f = env.cameras._renderer.render(["front"], rgb=False, depth=True)["front"]
+    f = env.cameras.renderer.render(["front"], rgb=False, depth=True)["front"]
     assert len(set(f.fovy.tolist())) == 3
     pts = depth_to_world(f.depth, f.fovy, f.cam_pos, f.cam_mat)
     z = pts[..., 2]

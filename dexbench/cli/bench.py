@@ -100,7 +100,7 @@ def bench_render(overrides: list[str]) -> dict:
     env = make_env(**kwargs)
     run_dir = new_run_dir("bench", f"render-{env.task.name}-{env.embodiment.name}", cfg)
     env.reset()
-    renderer, n, steps = env.cameras._renderer, env.num_envs, int(cfg.steps)
+    renderer, n, steps = env.cameras.renderer, env.num_envs, int(cfg.steps)
     renderer.render(["front"], rgb=True, depth=True)
     t0 = time.perf_counter()
     for _ in tqdm(range(steps), desc=f"render x{n}", leave=False):

@@ -30,7 +30,7 @@ class CameraObservations:
 
     def __init__(self, renderer, cameras: tuple[str, ...], groups: tuple[str, ...],
                  num_points: int) -> None:
-        self._renderer = renderer
+        self.renderer = renderer
         self.cameras = cameras
         self.groups = groups
         self.num_points = num_points
@@ -40,7 +40,7 @@ class CameraObservations:
 
     def compute(self) -> dict[str, torch.Tensor]:
         want_depth = "depth" in self.groups or "pointcloud" in self.groups
-        frames = self._renderer.render(list(self.cameras), rgb="rgb" in self.groups,
+        frames = self.renderer.render(list(self.cameras), rgb="rgb" in self.groups,
                                        depth=want_depth)
         out: dict[str, torch.Tensor] = {}
         for cam, f in frames.items():
