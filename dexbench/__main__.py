@@ -1,4 +1,4 @@
-"""`python -m dexbench ...`: list and inspect tasks and embodiments."""
+"""`python -m dexbench ...`: list, inspect, snapshot, docs and validate."""
 
 from dexbench.cli.errors import run_cli
 from dexbench.cli.introspect import main

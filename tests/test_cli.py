@@ -75,9 +75,12 @@ def test_bench_sim_reports_throughput_and_writes_run_dir():
 
 
 def test_bench_render_reports_images_per_second():
-    result = bench_render(["num_envs=2", "steps=2", "width=32", "height=32"])
-    assert result["images_per_s"] > 0 and result["resolution"] == [32, 32]
-    assert result["num_envs"] == 2 and "CpuRenderer" in result["renderer"]
+    result = bench_render(["num_envs=2", "steps=2", "width=32", "height=32",
+                           "renderers=[cpu,warp]"])
+    assert [r["renderer"].split()[0] for r in result["results"]] == ["cpu", "warp"]
+    assert all(r["images_per_s"] > 0 for r in result["results"])
+    assert result["resolution"] == [32, 32] and result["num_envs"] == 2
+    assert result["renderer"].startswith("cpu")  # the headline is the first result
 
 
 def test_snapshot_writes_a_contact_sheet():

@@ -195,15 +195,7 @@ def test_floating_hand_lifts_cube(hand: str) -> None:
     _check_lift(*_grasp_and_lift(model, data, emb, grasp_z, lambda z: (wrist_z, z - z_home)))
 
 
-FR3_XFAIL = pytest.mark.xfail(
-    strict=True, reason="fr3 home pose sits at its joint-5 limit: the palm cannot rise above "
-    "home height with the hand mounted palm-down, fingers along the flange axis"
-)
-
-
-@pytest.mark.parametrize(
-    "name", ["xarm7_shadow", "ur10e_shadow", pytest.param("fr3_shadow", marks=FR3_XFAIL)]
-)
+@pytest.mark.parametrize("name", ["xarm7_shadow", "ur10e_shadow", "fr3_shadow"])
 def test_arm_hand_lifts_cube(name: str) -> None:
     """The same grasp on an arm: IK on the arm joints keeps the palm level and moves it."""
     model, emb = _scene(name, cube=True)

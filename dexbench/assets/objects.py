@@ -72,13 +72,17 @@ def mocap_body(spec: mujoco.MjSpec, name: str) -> mujoco.MjsBody:
     return spec.worldbody.add_body(name=name, mocap=True)
 
 
+ROLLING_FRICTION = 0.002  # m, balls
+
+
 def add_geom(body: mujoco.MjsBody, name: str, kind: str, size: Sequence[float],
              rgba: Sequence[float], mass: float | None = None,
-             friction: Sequence[float] = DEFAULT_FRICTION, **kw) -> mujoco.MjsGeom:
-    """A collision geom (condim 4: torsional friction helps grasps)."""
+             friction: Sequence[float] = DEFAULT_FRICTION, condim: int = 4,
+             **kw) -> mujoco.MjsGeom:
+    """A collision geom (condim 4 by default: torsional friction helps grasps)."""
     geom = body.add_geom(name=name, type=getattr(mujoco.mjtGeom, f"mjGEOM_{kind.upper()}"),
                          size=list(size), rgba=list(rgba), friction=list(friction),
-                         condim=4, **kw)
+                         condim=condim, **kw)
     if mass is not None:
         geom.mass = mass
     return geom
@@ -97,9 +101,14 @@ def add_free_box(spec: mujoco.MjSpec, name: str, half_size: Sequence[float], mas
 def add_sphere(spec: mujoco.MjSpec, name: str, radius: float = 0.03, mass: float = 0.1,
                rgba: Sequence[float] = (0.2, 0.4, 0.9, 1.0),
                friction: Sequence[float] = DEFAULT_FRICTION) -> ObjectInfo:
-    """A free ball; its origin is its centre."""
+    """A free ball; its origin is its centre.
+
+    It has rolling resistance (condim 6, 2 mm rolling friction, like a ball on a
+    tablecloth) so a nudged ball comes to rest on the table instead of rolling off it.
+    """
     body = free_body(spec, name)
-    add_geom(body, f"{name}/geom", "sphere", [radius], rgba, mass, friction)
+    add_geom(body, f"{name}/geom", "sphere", [radius], rgba, mass,
+             [*friction[:2], ROLLING_FRICTION], condim=6)
     return ObjectInfo(name, name, f"{name}/free", False, radius, radius)
 
 

@@ -4,6 +4,9 @@
 success, reward, observations). `raw_physics_steps_per_s` steps the very same compiled
 model with `mujoco.batch` alone, from the same states and with the same controls.
 `ratio` = env physics throughput (env steps/s x decimation) / raw physics steps/s.
+
+`python bench.py render ...`: RGB-D images/s of the CPU renderer and, with a GPU, of
+mujoco_warp's ray tracer (`renderers=` picks).
 """
 
 from __future__ import annotations
@@ -20,10 +23,11 @@ from tqdm import tqdm
 
 from dexbench.cli.config import env_kwargs, load_config, new_run_dir, write_atomic
 from dexbench.envs.dex_env import DexEnv
+from dexbench.sim.warp_render import WarpRenderer, default_warp_device
 from dexbench.tasks.registry import make_env
 
 USAGE = """usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=...] ...
-       python bench.py render [num_envs=16] [width=128] [height=128] ..."""
+       python bench.py render [num_envs=16] [width=128] [height=128] [renderers=[cpu,warp]] ..."""
 
 
 def _actions(env: DexEnv, count: int, noise: float, seed: int) -> list[torch.Tensor]:
@@ -91,35 +95,70 @@ def bench_sim(overrides: list[str]) -> dict:
     return result
 
 
-def bench_render(overrides: list[str]) -> dict:
-    """RGB-D images per second of one camera (an RGB + depth pair counts once)."""
-    cfg = load_config("bench", ["num_envs=16", "steps=20", *overrides])
-    width, height = int(cfg.width), int(cfg.height)
-    kwargs = env_kwargs(cfg)
-    kwargs.update(obs=["rgb", "depth"], image_size=(width, height))
-    env = make_env(**kwargs)
-    run_dir = new_run_dir("bench", f"render-{env.task.name}-{env.embodiment.name}", cfg)
-    env.reset()
-    renderer, n, steps = env.cameras.renderer, env.num_envs, int(cfg.steps)
+def _renderers(cfg) -> list[str]:
+    """`renderers=auto`: the CPU renderer, plus the warp one when there is a GPU."""
+    if cfg.renderers != "auto":
+        return [str(r) for r in cfg.renderers]
+    return ["cpu", "warp"] if default_warp_device().startswith("cuda") else ["cpu"]
+
+
+def _time_renderer(env: DexEnv, steps: int) -> float:
+    """Seconds for `steps` renders of the front camera (after one untimed render)."""
+    renderer = env.cameras.renderer
     renderer.render(["front"], rgb=True, depth=True)
     t0 = time.perf_counter()
-    for _ in tqdm(range(steps), desc=f"render x{n}", leave=False):
+    for _ in tqdm(range(steps), desc=f"render x{env.num_envs}", leave=False):
         renderer.render(["front"], rgb=True, depth=True)
-    elapsed = time.perf_counter() - t0
-    result = {
-        "benchmark": "render",
-        "renderer": f"{cfg.sim.backend} ({type(renderer).__name__}, "
-                    f"MUJOCO_GL={os.environ.get('MUJOCO_GL', '')})",
-        "task": env.task.name,
-        "embodiment": env.embodiment.name,
-        "num_envs": n,
-        "resolution": [width, height],
-        "images_per_s": round(n * steps / elapsed, 1),
-        "mujoco": mujoco.__version__,
-        "run_dir": str(run_dir),
-    }
+    return time.perf_counter() - t0
+
+
+def _renderer_label(renderer) -> str:
+    if isinstance(renderer, WarpRenderer):
+        return f"warp ({renderer.device})"
+    return f"cpu (mujoco.Renderer, MUJOCO_GL={os.environ.get('MUJOCO_GL', '')})"
+
+
+def bench_render(overrides: list[str]) -> dict:
+    """RGB-D images per second of one camera (an RGB + depth pair counts once), per
+    renderer, with the images delivered where the env's tensors live (CPU for the CPU
+    backend) and, for warp on a GPU, also kept on the GPU; the returned object is the
+    first renderer's first result, with every result listed."""
+    cfg = load_config("bench", ["num_envs=16", "steps=20", *overrides])
+    width, height = int(cfg.width), int(cfg.height)
+    results = []
+    for kind in _renderers(cfg):
+        kwargs = env_kwargs(cfg)
+        kwargs.update(obs=["rgb", "depth"], image_size=(width, height), renderer=kind)
+        env = make_env(**kwargs)
+        env.reset()
+        renderer = env.cameras.renderer
+        runs = [("on the env's device", env.device)]
+        if isinstance(renderer, WarpRenderer) and renderer.device != "cpu":
+            runs.append(("kept on the GPU", torch.device(renderer.device)))
+        for where, device in runs:
+            if isinstance(renderer, WarpRenderer):
+                renderer.output_device = device
+            elapsed = _time_renderer(env, int(cfg.steps))
+            results.append({
+                "renderer": _renderer_label(renderer),
+                "images": f"{where} ({device})",
+                "num_envs": env.num_envs,
+                "resolution": [width, height],
+                "images_per_s": round(env.num_envs * int(cfg.steps) / elapsed, 1),
+            })
+            print(f"{results[-1]['images_per_s']:,.0f} RGB-D images/s "
+                  f"({results[-1]['renderer']}, images {results[-1]['images']}, "
+                  f"{env.num_envs} envs, {width}x{height})")
+    run_dir = new_run_dir("bench", f"render-{env.task.name}-{env.embodiment.name}", cfg)
+    result = {"benchmark": "render", **results[0], "task": env.task.name,
+              "embodiment": env.embodiment.name, "results": results,
+              "mujoco": mujoco.__version__, "gpu": _gpu_name(), "run_dir": str(run_dir)}
     write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
     return result
+
+
+def _gpu_name() -> str | None:
+    return torch.cuda.get_device_name(0) if torch.cuda.is_available() else None
 
 
 def format_table(result: dict) -> str:
@@ -140,8 +179,6 @@ def main(argv: list[str]) -> int:
         print(format_table(result))
     elif argv[:1] == ["render"]:
         result = bench_render(argv[1:])
-        print(f"{result['images_per_s']:,.0f} RGB-D images/s ({result['renderer']}, "
-              f"{result['num_envs']} envs, {result['resolution'][0]}x{result['resolution'][1]})")
     else:
         print(USAGE)
         return 2

@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 from dexbench.assets.robots import ChecksumMismatchError, MissingRobotModelError
 from dexbench.cli.config import ConfigError
+from dexbench.data.meta import DatasetError
 from dexbench.embodiments.builder import UnknownEmbodimentError
 from dexbench.envs.dex_env import InvalidActionError
 from dexbench.envs.scene import InfeasibleTaskError
@@ -14,7 +15,7 @@ from dexbench.tasks.registry import UnknownTaskError
 
 USER_ERRORS = (ConfigError, UnknownTaskError, UnknownEmbodimentError, InfeasibleTaskError,
                MissingRobotModelError, ChecksumMismatchError, InvalidActionError,
-               NotImplementedError)
+               DatasetError, NotImplementedError)
 
 
 def run_cli(main: Callable[[list[str]], int]) -> None:

@@ -1,4 +1,4 @@
-"""`python -m dexbench list tasks|embodiments` and `python -m dexbench inspect ...`."""
+"""`python -m dexbench list|inspect|docs|snapshot|validate ...`."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import sys
 from dexbench.cli.config import env_kwargs, load_config
 from dexbench.cli.docs import write_docs
 from dexbench.cli.snapshot import snapshot
+from dexbench.cli.validate import validate
 from dexbench.embodiments.builder import embodiment_names, parse_embodiment
 from dexbench.tasks.registry import TASKS, make_env
 
@@ -16,7 +17,8 @@ USAGE = """usage:
   python -m dexbench list embodiments
   python -m dexbench inspect task=<Task> embodiment=<embodiment> [obs=<preset>]
   python -m dexbench docs             (regenerates docs/tasks.md)
-  python -m dexbench snapshot task=<Task> embodiment=<embodiment> visual=<fixed|train|test>"""
+  python -m dexbench snapshot task=<Task> embodiment=<embodiment> visual=<fixed|train|test>
+  python -m dexbench validate dataset=<dataset folder> [strict=true]"""
 
 
 def list_tasks() -> str:
@@ -69,6 +71,8 @@ def main(argv: list[str]) -> int:
         print(f"wrote {snapshot(argv[1:])}")
     elif argv == ["docs"]:
         print(f"wrote {write_docs()}")
+    elif argv[:1] == ["validate"]:
+        return validate(argv[1:])
     else:
         print(USAGE, file=sys.stderr)
         return 2

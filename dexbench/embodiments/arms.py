@@ -1,8 +1,16 @@
-"""The three arms: model sources and where they stand relative to the table."""
+"""The three arms: model sources, how each carries the hand, and where it stands."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
+
+# Hand-frame axes (columns: fingers, palm y, palm normal) in an arm's flange frame.
+# Inline: the fingers continue the tool axis z, the palm normal is the flange's x.
+INLINE_MOUNT = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+# Flat: the palm normal is the tool axis, the fingers run along the flange's x.
+FLAT_MOUNT = np.eye(3)
 
 
 @dataclass(frozen=True)
@@ -13,12 +21,20 @@ class ArmSpec:
     behind the flange at home, so every hand gets the same comfortable arm posture
     however long it is. `seed_qpos` starts the inverse kinematics that finds the home
     pose, so it picks the elbow-up branch.
+
+    `hand_rot` is how the flange carries the hand: the mount that lets the arm hold the
+    home pose (palm down, fingers forward, low over the table) and reach over the table
+    with every joint clear of its limits. The UR10e and xArm7 can hold their flange
+    level there, so they carry the hand inline; the FR3 cannot (joint 6's lower limit,
+    ~0.54 rad, forbids a level, forward-pointing flange low down), so its hand sits flat
+    under a downward flange, the usual Franka posture.
     """
 
     name: str
     collection: str
     entry: str
     seed_qpos: tuple[float, ...]
+    hand_rot: np.ndarray
     flange_reach: float = 0.4
 
 
@@ -27,14 +43,16 @@ ARMS: dict[str, ArmSpec] = {
         name="fr3",
         collection="franka_fr3",
         entry="fr3",
-        seed_qpos=(0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.785),
-        flange_reach=0.4,
+        seed_qpos=(0.0, -0.2, 0.0, -2.8, 0.0, 2.7, 0.0),
+        hand_rot=FLAT_MOUNT,
+        flange_reach=0.37,
     ),
     "ur10e": ArmSpec(
         name="ur10e",
         collection="universal_robots_ur10e",
         entry="ur10e",
         seed_qpos=(2.7, -1.4, 2.4, -1.0, 1.2, -1.57),
+        hand_rot=INLINE_MOUNT,
         flange_reach=0.55,
     ),
     "xarm7": ArmSpec(
@@ -42,6 +60,7 @@ ARMS: dict[str, ArmSpec] = {
         collection="ufactory_xarm7",
         entry="xarm7_nohand",
         seed_qpos=(0.0, 0.0, 0.0, 1.2, 0.0, 1.2, 0.0),
+        hand_rot=INLINE_MOUNT,
         flange_reach=0.35,
     ),
 }

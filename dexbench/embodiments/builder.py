@@ -29,8 +29,6 @@ HOME_PALM_Z = 0.8
 BIMANUAL_Y = {"right": -0.3, "left": 0.3}
 # Home orientation of the hand frame: fingers along +x, palm normal down (-z).
 HOME_PALM_ROT = np.diag([1.0, -1.0, -1.0])
-# Hand frame in the arm flange frame: fingers along the tool axis z, palm normal along x.
-FLANGE_PALM_ROT = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
 
 WRIST_AXES = (("x", 2, (1, 0, 0)), ("y", 2, (0, 1, 0)), ("z", 2, (0, 0, 1)),
               ("rx", 3, (1, 0, 0)), ("ry", 3, (0, 1, 0)), ("rz", 3, (0, 0, 1)))
@@ -202,7 +200,12 @@ def _add_arm_side(spec: mujoco.MjSpec, arm: str, hand: str, side: str, palm_pos,
                   home: dict[str, float] | None) -> SideLayout:
     info = ARMS[arm]
     geo = hand_geometry(hand, side)
-    base_x = palm_pos[0] - geo.back_extent - info.flange_reach
+    # H sits on the tool axis just far enough out that the whole hand is beyond the
+    # flange face, so it cannot cut into the wrist links (their contacts are filtered).
+    tool_axis = info.hand_rot[2]  # in H
+    standoff = geo.extent_behind(tool_axis)
+    flange_x = palm_pos[0] - standoff * (HOME_PALM_ROT @ tool_axis)[0]
+    base_x = flange_x - info.flange_reach
     base_pos = [base_x, palm_pos[1], TABLE_TOP_Z]
     base = spec.worldbody.add_body(name=f"{side}/base", pos=base_pos)
     base.add_geom(name=f"{side}/pedestal", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
@@ -219,8 +222,8 @@ def _add_arm_side(spec: mujoco.MjSpec, arm: str, hand: str, side: str, palm_pos,
     site = spec.site(prefix + "attachment_site")
     flange = site.parent
     mount = flange.add_body(name=f"{side}/mount", pos=list(site.pos), quat=list(site.quat))
-    palm_in_flange = np.array([0.0, 0.0, geo.back_extent])
-    hand_joints, tips, tip_sites = _attach_hand(spec, mount, hand, side, FLANGE_PALM_ROT,
+    palm_in_flange = np.array([0.0, 0.0, standoff])
+    hand_joints, tips, tip_sites = _attach_hand(spec, mount, hand, side, info.hand_rot,
                                                 palm_in_flange)
     _mark_robot(spec.body(arm_root))
     home_q = home if home is not None else dict(zip(arm_joints, info.seed_qpos, strict=True))

@@ -32,10 +32,15 @@ class HandGeometry:
     fingertip_offsets: tuple[np.ndarray, ...]  # per fingertip body, in its body frame
     palm_site_pos: np.ndarray  # H's origin in the palm body frame
     palm_site_quat: np.ndarray  # H's orientation in the palm body frame
-    back_extent: float  # how far (m) the hand reaches behind H's origin along -x
+    corners: np.ndarray  # (n, 3) corners of the open hand's geom bounding boxes, in H
     actuators: tuple[str, ...]  # unprefixed actuator names, model order
     synergies: dict[str, np.ndarray]  # name -> (nu_hand,) targets
     open_qpos: dict[str, float]  # settled joint positions of the open hand, by joint
+
+    def extent_behind(self, axis: np.ndarray) -> float:
+        """How far (m) the open hand reaches behind H's origin against `axis` (unit, in H):
+        a mount plate through the origin, normal to `axis`, must stand off this much."""
+        return float(max(0.0, -np.min(self.corners @ axis)))
 
 
 def hand_model_spec(hand: HandSpec, side: str) -> mujoco.MjSpec:
@@ -113,14 +118,13 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
     palm_rot = data.xmat[palm].reshape(3, 3)
     site_quat = np.zeros(4)
     mujoco.mju_mat2Quat(site_quat, (palm_rot.T @ rot).ravel())
-    back = float(max(0.0, -np.min((geom_corners - palm_pos) @ x)))
     return HandGeometry(
         frame_pos=palm_pos,
         frame_rot=rot,
         fingertip_offsets=tuple(model.body_ipos[t].copy() for t in tips),
         palm_site_pos=palm_rot.T @ (palm_pos - data.xpos[palm]),
         palm_site_quat=site_quat,
-        back_extent=back,
+        corners=(geom_corners - palm_pos) @ rot,
         actuators=names,
         synergies=synergies,
         open_qpos=open_qpos,

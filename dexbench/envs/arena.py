@@ -6,17 +6,22 @@ objects) inherit them, so one place decides integrator, timestep and friction co
 
 from __future__ import annotations
 
+import pathlib
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from dexbench.assets.backgrounds import DEFAULT as BACKDROP_DEFAULT
+from dexbench.assets.backgrounds import add_background_library
 from dexbench.assets.materials import add_material_library
 from dexbench.assets.objects import new_spec
 from dexbench.embodiments.builder import TABLE_TOP_Z
 
 TABLE_HALF_SIZE = (0.6, 0.75)  # table top spans x in [-0.6, 0.6], y in [-0.75, 0.75]
 TABLE_THICKNESS = 0.04
+BACKDROP_HALF_SIZE = 3.5  # walls at x, y = +-3.5 m
+BACKDROP_HEIGHT = 4.0  # ceiling height
 
 
 @dataclass(frozen=True)
@@ -63,8 +68,28 @@ def apply_options(spec: mujoco.MjSpec, options: PhysicsOptions) -> None:
     spec.memory = int(options.arena_mb * 2**20)
 
 
-def build_arena(options: PhysicsOptions) -> mujoco.MjSpec:
-    """A fresh spec holding floor, table, lights and cameras."""
+def _add_backdrop(world: mujoco.MjsBody) -> None:
+    """Four walls and a ceiling around the scene, the background every camera sees.
+
+    Geometry rather than a skybox, because a geom's material can differ per world
+    (background variation) and both renderers see it alike; it never collides and lies
+    beyond the point-cloud crop.
+    """
+    half, z, thick = BACKDROP_HALF_SIZE, BACKDROP_HEIGHT / 2, 0.01
+    walls = {"north": ([half, 0, z], [thick, half, z]),
+             "south": ([-half, 0, z], [thick, half, z]),
+             "east": ([0, half, z], [half, thick, z]),
+             "west": ([0, -half, z], [half, thick, z]),
+             "ceiling": ([0, 0, 2 * z], [half, half, thick])}
+    for name, (pos, size) in walls.items():
+        world.add_geom(name=f"backdrop/{name}", type=mujoco.mjtGeom.mjGEOM_BOX, pos=pos,
+                       size=size, contype=0, conaffinity=0, material=BACKDROP_DEFAULT)
+
+
+def build_arena(options: PhysicsOptions,
+                backgrounds: tuple[pathlib.Path, ...] = ()) -> mujoco.MjSpec:
+    """A fresh spec holding floor, table, lights, cameras and the backdrop; `backgrounds`
+    are image files the backdrop may show under background variation."""
     spec = new_spec()
     spec.modelname = "dexbench"
     apply_options(spec, options)
@@ -74,10 +99,9 @@ def build_arena(options: PhysicsOptions) -> mujoco.MjSpec:
     # A 1024 shadow map keeps soft-rasterized (EGL/OSMesa) frames ~4x faster than the
     # default 4096 with shadows still readable at policy resolutions.
     spec.visual.quality.shadowsize = 1024
-    spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
-                     builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, rgb1=[0.55, 0.65, 0.8],
-                     rgb2=[0.1, 0.1, 0.15], width=256, height=256)
+    add_background_library(spec, list(backgrounds))
     world = spec.worldbody
+    _add_backdrop(world)
     world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[3, 3, 0.05],
                    rgba=[0.55, 0.55, 0.55, 1])
     table = world.add_body(name="table", pos=[0, 0, TABLE_TOP_Z - TABLE_THICKNESS / 2])

@@ -4,10 +4,15 @@ Actions are absolute joint-position targets for every actuator, (N, action_dim),
 for one control period (`control_dt`, 60 Hz by default). Observations are a dict of
 group -> float32 tensor on the backend's device; groups a task does not populate are
 absent. `terminated` is success, `truncated` the time limit.
+
+Every episode has a key (seed, env, episode) that fixes its reset sample, goal and
+variation; `reset_to` replays a key in any environment and `restore` puts a recorded
+`sim_state` back, so recorded demonstrations regenerate their observations exactly.
 """
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 import torch
 
@@ -23,6 +28,15 @@ from dexbench.sim.factory import make_backend, make_renderer
 
 Obs = dict[str, torch.Tensor]
 
+_S = mujoco.mjtState
+# What `restore` needs to reproduce a frame and continue its physics exactly: MuJoCo's
+# full physics state plus the solver warm start (contact forces depend on it), the
+# controls in force, mocap poses (fixed objects) and userdata (task memory, e.g. stages).
+# Applied forces and equality switches are left out: the env never writes them.
+STATE_SPEC = (int(_S.mjSTATE_FULLPHYSICS) | int(_S.mjSTATE_WARMSTART) | int(_S.mjSTATE_CTRL)
+              | int(_S.mjSTATE_MOCAP_POS) | int(_S.mjSTATE_MOCAP_QUAT)
+              | int(_S.mjSTATE_USERDATA))
+
 
 class InvalidActionError(ValueError):
     """An action batch with the wrong shape or non-finite values."""
@@ -35,7 +49,8 @@ class DexEnv:
     length (k > 0 stacks the last k frames on axis 1). With `auto_reset`, environments
     that terminate or truncate are reset inside `step`. Camera groups render `cameras`
     (default: the preset's: front, or front/left/right when multiview; wrist cameras are
-    `<side>/hand/wrist_cam`) at `image_size` (width, height); the point cloud keeps
+    `<side>/hand/wrist_cam`) at `image_size` (width, height) with `renderer` (`cpu`:
+    OpenGL, `warp`: mujoco_warp ray tracing on the GPU); the point cloud keeps
     `num_points` points.
     """
 
@@ -53,6 +68,7 @@ class DexEnv:
         history: int | None = None,
         cameras: tuple[str, ...] | list[str] | None = None,
         image_size: tuple[int, int] = (256, 256),
+        renderer: str = "cpu",
         num_points: int = 512,
         visual: VisualVariation | None = None,
         physical: PhysicalVariation | None = None,
@@ -67,7 +83,8 @@ class DexEnv:
         self.decimation = self.physics.decimation
         self.control_dt = self.decimation * self.physics.timestep
         self.episode_steps = round(task.episode_seconds / self.control_dt)
-        self.scene = compose_scene(task, embodiment, self.physics)
+        visual = visual or VisualVariation()
+        self.scene = compose_scene(task, embodiment, self.physics, visual.background_files())
         self.embodiment = self.scene.embodiment
         model = self.scene.model
         self.sim = make_backend(backend, model, num_envs, nthread)
@@ -79,16 +96,19 @@ class DexEnv:
         self.view = SceneView(model, fields, sites, palms, self.scene.hand_geoms)
         model_materials = [model.material(f"var/mat{i}").id for i in range(NUM_MATERIALS)]
         self.variation = Variation(self.scene, self.sim, model_materials,
-                                   visual or VisualVariation(), physical or PhysicalVariation())
+                                   visual, physical or PhysicalVariation())
         self._noise = torch.Generator(device=self.device).manual_seed(seed)
         preset = resolve_preset(obs)
         self.groups = tuple(g for g in preset.groups if g not in CAMERA_GROUPS)
         self.history = preset.history if history is None else history
+        # Contact forces are acceleration-stage quantities: computed at the current state
+        # (not the last substep) so that a restored state observes the same forces.
+        self._acceleration = "contact" in self.groups
         camera_groups = tuple(g for g in preset.groups if g in CAMERA_GROUPS)
         self.cameras: CameraObservations | None = None
         if camera_groups:
             names = tuple(cameras) if cameras else default_cameras(preset.multiview)
-            renderer = make_renderer(self.sim, *image_size)
+            renderer = make_renderer(self.sim, *image_size, kind=renderer)
             self.cameras = CameraObservations(renderer, names, camera_groups, num_points)
         self._terms = ObservationTerms(self.scene, self.view, task, fields)
 
@@ -100,6 +120,7 @@ class DexEnv:
         self._home_qadr = torch.tensor([model.joint(j).qposadr[0] for j in home])
         self._home_qval = torch.tensor(list(home.values()), dtype=torch.float64)
         self._episode = np.zeros(num_envs, dtype=np.int64)
+        self._keys = np.zeros((num_envs, 3), dtype=np.int64)
         self.steps = torch.zeros(num_envs, dtype=torch.long, device=self.device)
         self.last_action = self.home_action.repeat(num_envs, 1).float()
         self._history: Obs = {}
@@ -122,27 +143,56 @@ class DexEnv:
         self.seed = seed
         self._episode[:] = 0
 
-    def _rngs(self, env_ids: np.ndarray, stream: int = 0) -> list[np.random.Generator]:
+    @property
+    def episode_keys(self) -> np.ndarray:
+        """(num_envs, 3) int64 key (seed, env, episode) of each environment's episode."""
+        return self._keys.copy()
+
+    @staticmethod
+    def _rngs(keys: np.ndarray, stream: int = 0) -> list[np.random.Generator]:
         # One stream per (seed, env, episode, purpose): resets of some envs never shift
         # others', and switching variation on never changes the task's samples.
-        return [np.random.default_rng([self.seed, int(i), int(self._episode[i]), stream])
-                for i in env_ids]
+        return [np.random.default_rng([*map(int, key), stream]) for key in keys]
+
+    def _env_ids(self, env_ids) -> torch.Tensor:
+        ids = torch.arange(self.num_envs) if env_ids is None else torch.as_tensor(
+            env_ids, dtype=torch.long).reshape(-1).cpu()
+        if len(ids) and (ids.min() < 0 or ids.max() >= self.num_envs):
+            raise IndexError(f"env_ids must lie in [0, {self.num_envs}), got {ids.tolist()}")
+        return ids
 
     def reset(self, env_ids: torch.Tensor | np.ndarray | list[int] | None = None) -> Obs:
         """Reset some (default all) environments; return observations of all."""
-        ids = torch.arange(self.num_envs) if env_ids is None else torch.as_tensor(
-            env_ids, dtype=torch.long).reshape(-1).cpu()
+        ids = self._env_ids(env_ids)
         if len(ids) == 0:
             return self._observe()
-        if ids.min() < 0 or ids.max() >= self.num_envs:
-            raise IndexError(f"env_ids must lie in [0, {self.num_envs}), got {ids.tolist()}")
+        n = ids.numpy()
+        keys = np.stack([np.full(len(n), self.seed), n, self._episode[n]], axis=1)
+        self._episode[n] += 1
+        return self._reset(ids, keys)
+
+    def reset_to(self, env_ids, keys) -> Obs:
+        """Reset environments into given episodes; return observations of all.
+
+        `keys` (n, 3) are episode keys as `episode_keys` reports them: the reset sample,
+        goal and variation are exactly that episode's, whichever environment replays it.
+        The environments' own episode counters do not advance.
+        """
+        ids = self._env_ids(env_ids)
+        keys = np.asarray(keys, dtype=np.int64).reshape(-1, 3)
+        if len(keys) != len(ids):
+            raise ValueError(f"{len(keys)} episode keys for {len(ids)} environments")
+        return self._reset(ids, keys) if len(ids) else self._observe()
+
+    def _reset(self, ids: torch.Tensor, keys: np.ndarray) -> Obs:
+        self._keys[ids.numpy()] = keys
         self.sim.reset(ids)
         qpos = self._f["qpos"]
         dev_ids = ids.to(self.device)
         qpos[dev_ids[:, None], self._home_qadr.to(self.device)] = self._home_qval.to(
             self.device, qpos.dtype)
         self._f["ctrl"][dev_ids] = self.home_action.to(qpos.dtype)
-        sample = self.task.sample_reset(self._rngs(ids.numpy()))
+        sample = self.task.sample_reset(self._rngs(keys))
         model = self.scene.model
         for joint, pose in sample.free_poses.items():
             adr = model.joint(joint).qposadr[0]
@@ -162,15 +212,46 @@ class DexEnv:
                 self.view.goal = torch.zeros(self.num_envs, goal.shape[1], dtype=goal.dtype,
                                              device=self.device)
             self.view.goal[dev_ids] = goal
-        self.variation.apply(ids.numpy(), self._rngs(ids.numpy(), stream=1))
-        self.sim.forward(ids)
+        self.variation.apply(ids.numpy(), self._rngs(keys, stream=1))
+        self.sim.forward(ids, self._acceleration)
         for body, initial in self.view.initial_body_pos.items():
             initial[dev_ids] = self.view.body_pos(body)[dev_ids]
-        self._episode[ids.numpy()] += 1
         self._was_reset = True
         self.steps[dev_ids] = 0
         self.last_action[dev_ids] = self.home_action.float()
         return self._observe(reset_ids=dev_ids)
+
+    @property
+    def state_size(self) -> int:
+        """Length of one environment's `sim_state`."""
+        return mujoco.mj_stateSize(self.scene.model, STATE_SPEC)
+
+    def sim_state(self) -> torch.Tensor:
+        """(num_envs, state_size) float64 simulator state (`STATE_SPEC`), for `restore`."""
+        return self.sim.get_state(STATE_SPEC)
+
+    def restore(self, env_ids, states, last_action=None) -> Obs:
+        """Put recorded `sim_state`s back into environments; return their observations.
+
+        Nothing is stepped. Observations are (len(env_ids), ...) per group. The
+        environments must have been reset to the recorded episodes (`reset_to`): goal,
+        variation and reset poses come from there. `last_action` is the action before this
+        frame (`policy` group; default: the home pose, as after a reset); history stacks of
+        these environments restart from this frame.
+        """
+        ids = self._env_ids(env_ids)
+        states = torch.as_tensor(states, dtype=torch.float64)
+        if states.shape != (len(ids), self.state_size):
+            raise ValueError(f"states have shape {tuple(states.shape)}; expected "
+                             f"({len(ids)}, {self.state_size}) for {self.task.name} on "
+                             f"{self.embodiment.name} (was it recorded for another scene?)")
+        self.sim.set_state(ids, states.to(self.device), STATE_SPEC, self._acceleration)
+        dev_ids = ids.to(self.device)
+        self.last_action[dev_ids] = (self.home_action.float() if last_action is None else
+                                     torch.as_tensor(last_action, dtype=torch.float32,
+                                                     device=self.device))
+        obs = self._observe(reset_ids=dev_ids)
+        return {k: v[dev_ids] for k, v in obs.items()}
 
     def _validate(self, actions) -> torch.Tensor:
         a = torch.as_tensor(actions, device=self.device)
@@ -195,7 +276,7 @@ class DexEnv:
         a = self._validate(actions)
         self._f["ctrl"][:] = a
         self.last_action = a.float()
-        self.sim.step(self.decimation)
+        self.sim.step(self.decimation, self._acceleration)
         self.steps += 1
         self.task.update(self.view)
         success = self.task.success(self.view)

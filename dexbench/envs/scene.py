@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pathlib
 from dataclasses import dataclass
 
 import mujoco
@@ -47,15 +48,17 @@ def _contact_sensor(spec: mujoco.MjSpec, obj: str, tip_body: str) -> str:
     return name
 
 
-def compose_scene(task: Task, embodiment: str, options: PhysicsOptions) -> Scene:
-    """Build and compile the scene for a task on an embodiment."""
+def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
+                  backgrounds: tuple[pathlib.Path, ...] = ()) -> Scene:
+    """Build and compile the scene for a task on an embodiment (`backgrounds`: image files
+    background variation may show)."""
     parsed = parse_embodiment(embodiment)
     if task.bimanual and not parsed.bimanual:
         raise InfeasibleTaskError(
             f"{task.name} needs two hands but {embodiment} has one; use "
             f"bimanual_{parsed.mount}_{parsed.hand}"
         )
-    spec = build_arena(options)
+    spec = build_arena(options, backgrounds)
     plan = add_embodiment(spec, embodiment)
     task.build(spec)
     spec.nuserdata = task.memory_size

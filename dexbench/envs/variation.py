@@ -1,7 +1,7 @@
 """Visual and physical variation, sampled per environment at reset from seeded streams.
 
 Every switch is independent. Visual variation changes only rendering-side model fields
-(material ids, colours, lights, camera poses and field of view), drawing from the
+(material ids, colours, lights, camera poses and field of view, the backdrop), drawing from the
 `train` or `test` appearance pool so that evaluation can use unseen appearances.
 Physical variation scales object masses and frictions, articulated-joint damping and
 friction and robot actuator gains within ranges; observation noise perturbs proprio and
@@ -11,11 +11,14 @@ state. Both are off by default.
 from __future__ import annotations
 
 import math
+import pathlib
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from dexbench.assets.backgrounds import DEFAULT as BACKDROP_DEFAULT
+from dexbench.assets.backgrounds import background_pool, list_images
 from dexbench.assets.materials import pool
 from dexbench.envs.arena import CAMERAS
 from dexbench.envs.scene import Scene
@@ -36,6 +39,14 @@ class VisualVariation:
     camera_pos_jitter: float = 0.03  # m, per axis
     camera_rot_jitter_deg: float = 3.0
     fov_jitter_deg: float = 4.0
+    background: bool = True  # backdrop: procedural gradients/colours (+ user images)
+    background_dir: str | None = None  # a folder of .hdr/.png/.jpg images to add
+
+    def background_files(self) -> tuple[pathlib.Path, ...]:
+        """The user's background images, when this variation shows them."""
+        if not (self.enabled and self.background and self.background_dir):
+            return ()
+        return tuple(list_images(self.background_dir))
 
 
 @dataclass(frozen=True)
@@ -98,6 +109,10 @@ class Variation:
         self._robot_acts = list(range(m.nu))
         self._lights = list(range(m.nlight))
         self._cameras = [m.camera(name).id for name, _, _ in CAMERAS]
+        self._backdrop = [g for g in range(m.ngeom) if m.geom(g).name.startswith("backdrop/")]
+        library = [m.material(i).name for i in range(m.nmat)]
+        library = [n for n in library if n.startswith("bg/") and n != BACKDROP_DEFAULT]
+        self._backgrounds = [m.material(n).id for n in background_pool(library, visual.split)]
         self._materials = [material_ids[i] for i in pool(visual.split)]
 
     def apply(self, env_ids: np.ndarray, rngs: list[np.random.Generator]) -> None:
@@ -119,6 +134,8 @@ class Variation:
                     matid[env, g] = rng.choice(self._materials)
                 rgba = self._field("geom_rgba")
                 rgba[env, self._object_geoms, :3] = 1.0  # the material's texture shows
+            if v.background:
+                self._field("geom_matid")[env, self._backdrop] = rng.choice(self._backgrounds)
             if v.lighting or v.exposure:
                 diffuse = self._field("light_diffuse")
                 ldir = self._field("light_dir")

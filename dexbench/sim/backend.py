@@ -16,6 +16,30 @@ import torch
 
 STATE_FIELDS = ("qpos", "qvel", "ctrl", "mocap_pos", "mocap_quat", "userdata")
 DERIVED_FIELDS = ("xpos", "xquat", "geom_xpos", "site_xpos", "site_xmat", "sensordata")
+INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)  # every component: a world's full row
+
+
+def state_layout(model: mujoco.MjModel, spec: int) -> dict[str, slice]:
+    """Where each mjtState component of `spec` lies in a state vector of that spec.
+
+    Components are concatenated in bit order (as `mj_getState` does); the key is the
+    component's name without its prefix (`qpos`, `warmstart`, ...).
+    """
+    layout, offset = {}, 0
+    for bit in range(INTEGRATION.bit_length()):
+        if spec & (1 << bit):
+            size = mujoco.mj_stateSize(model, 1 << bit)
+            name = mujoco.mjtState(1 << bit).name.removeprefix("mjSTATE_").lower()
+            layout[name] = slice(offset, offset + size)
+            offset += size
+    return layout
+
+
+def state_columns(model: mujoco.MjModel, spec: int) -> torch.Tensor:
+    """Indices of a `spec` state's entries within the full (`INTEGRATION`) state row."""
+    full = state_layout(model, INTEGRATION)
+    return torch.cat([torch.arange(full[name].start, full[name].stop)
+                      for name in state_layout(model, spec)])
 
 
 class SimBackend(Protocol):
@@ -37,17 +61,23 @@ class SimBackend(Protocol):
     def warning_counts(self) -> torch.Tensor:
         """(num_envs,) simulator warnings per world since its last reset; never silent."""
 
-    def step(self, nsubsteps: int) -> None:
-        """Advance every world by `nsubsteps` physics steps with the current ctrl."""
+    def step(self, nsubsteps: int, acceleration: bool = False) -> None:
+        """Advance every world by `nsubsteps` physics steps with the current ctrl.
+
+        Derived fields are then current at the new state up to velocities; with
+        `acceleration`, also acceleration-stage ones (contact-force sensors), so that they
+        describe the new state rather than the last substep.
+        """
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Reset those worlds to the model defaults (qpos0, zero velocity, time 0)."""
 
-    def forward(self, env_ids: torch.Tensor) -> None:
+    def forward(self, env_ids: torch.Tensor, acceleration: bool = False) -> None:
         """Recompute derived fields of those worlds after their state was written."""
 
-    def get_state(self) -> torch.Tensor:
-        """Full physics state (mjSTATE_INTEGRATION) of every world, (num_envs, nstate)."""
+    def get_state(self, spec: int = INTEGRATION) -> torch.Tensor:
+        """State of every world, (num_envs, mj_stateSize(spec)); default: all of it."""
 
-    def set_state(self, env_ids: torch.Tensor, state: torch.Tensor) -> None:
-        """Overwrite the full physics state of those worlds, then `forward` them."""
+    def set_state(self, env_ids: torch.Tensor, state: torch.Tensor, spec: int = INTEGRATION,
+                  acceleration: bool = False) -> None:
+        """Overwrite the `spec` components of those worlds' state, then `forward` them."""

@@ -17,9 +17,10 @@ import mujoco.batch
 import numpy as np
 import torch
 
-from dexbench.sim.backend import DERIVED_FIELDS, STATE_FIELDS
+from dexbench.sim.backend import DERIVED_FIELDS, INTEGRATION, STATE_FIELDS, state_columns
 
 _VEL = mujoco.mjtStage.mjSTAGE_VEL.value
+_ACC = mujoco.mjtStage.mjSTAGE_ACC.value
 
 
 class CpuBackend:
@@ -36,6 +37,7 @@ class CpuBackend:
         for name in (*STATE_FIELDS, *DERIVED_FIELDS):
             self._fields[name] = self._as_tensor(self.batch.bind(name))
         self._state = self._as_tensor(self.batch.state)
+        self._spec_columns: dict[int, torch.Tensor] = {}
         self.per_world_model = False  # set once any model field gets per-world values
 
     @staticmethod
@@ -73,18 +75,27 @@ class CpuBackend:
         """(num_envs,) MuJoCo warnings (contact/constraint overflow, instability) so far."""
         return torch.from_numpy(self.batch.warning[:, :, 0].sum(axis=1))
 
-    def step(self, nsubsteps: int) -> None:
-        self.batch.step(nstep=nsubsteps, stage=_VEL)
+    def step(self, nsubsteps: int, acceleration: bool = False) -> None:
+        self.batch.step(nstep=nsubsteps, stage=_ACC if acceleration else _VEL)
 
     def reset(self, env_ids: torch.Tensor) -> None:
         self.batch.reset(ids=env_ids.numpy(), stage=mujoco.mjtStage.mjSTAGE_NONE.value)
 
-    def forward(self, env_ids: torch.Tensor) -> None:
-        self.batch.forward(ids=env_ids.numpy(), stage=_VEL)
+    def forward(self, env_ids: torch.Tensor, acceleration: bool = False) -> None:
+        self.batch.forward(ids=env_ids.numpy(), stage=_ACC if acceleration else _VEL)
 
-    def get_state(self) -> torch.Tensor:
-        return self._state.clone()
+    def _columns(self, spec: int) -> torch.Tensor:
+        if spec not in self._spec_columns:
+            self._spec_columns[spec] = state_columns(self.model, spec)
+        return self._spec_columns[spec]
 
-    def set_state(self, env_ids: torch.Tensor, state: torch.Tensor) -> None:
-        self._state[env_ids] = state.to(self._state.dtype)
-        self.forward(env_ids)
+    def get_state(self, spec: int = INTEGRATION) -> torch.Tensor:
+        if spec == INTEGRATION:
+            return self._state.clone()
+        return self._state[:, self._columns(spec)]  # advanced indexing copies
+
+    def set_state(self, env_ids: torch.Tensor, state: torch.Tensor, spec: int = INTEGRATION,
+                  acceleration: bool = False) -> None:
+        rows = torch.as_tensor(env_ids, dtype=torch.long).reshape(-1)
+        self._state[rows[:, None], self._columns(spec)] = state.to(self._state.dtype)
+        self.forward(rows, acceleration)

@@ -1,0 +1,1 @@
+"""Demonstrations: recording, the dataset format (LeRobotDataset v3), replay, validation."""

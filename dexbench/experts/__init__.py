@@ -1,0 +1,59 @@
+"""Scripted, embodiment-agnostic experts: `make_expert(env)` picks the task's script."""
+
+from __future__ import annotations
+
+import math
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.base import Expert
+from dexbench.experts.grasp import GraspExpert, GraspPlan, task_goal
+from dexbench.experts.press import PressExpert, PressPlan
+
+
+def _on_base_cube(env: DexEnv):
+    return env.view.body_pos("base_cube").cpu().numpy() + [0.0, 0.0, 0.052]
+
+
+def _drawer_pulled(env: DexEnv):
+    """A point ahead of the handle along the drawer's opening direction: keep pulling."""
+    view = env.view
+    handle = view.point_pos("cabinet/drawer", DRAWER_HANDLE)
+    return (handle + PULL_LEAD * view.axis("cabinet/drawer", (1.0, 0.0, 0.0))).cpu().numpy()
+
+
+DRAWER_HANDLE = (0.21, 0.0, 0.0)
+PULL_LEAD = 0.1
+
+PLANS: dict[str, GraspPlan] = {
+    "PickCube": GraspPlan("cube"),
+    "StackCube": GraspPlan("cube", target=_on_base_cube, release=True),
+    "RelocateSphere": GraspPlan("sphere", shift=(0.025, 0.0, 0.0), yaw="none",
+                                target=task_goal),
+    "PickUpStick": GraspPlan("stick", point=(0.0, 0.0, 0.09), yaw="none", side=True),
+    "RelocateObject": GraspPlan("bottle", point=(0.0, 0.0, 0.07), yaw="none", side=True,
+                                target=task_goal, goal_point=(0.0, 0.0, 0.09)),
+    # Hand hanging in front of the handle, palm towards the cabinet: the fingers curl
+    # behind the bar and the hand pulls along the drawer's axis.
+    "OpenDrawer": GraspPlan("cabinet/drawer", point=DRAWER_HANDLE, yaw="body",
+                            pitch=math.pi / 2, target=_drawer_pulled, goal_point=DRAWER_HANDLE),
+}
+
+PRESSES: dict[str, PressPlan] = {
+    "PushButton": PressPlan("button/cap", (0.0, 0.0, 0.02), with_fingers=False),
+    # Fingertips, tilted down, on the paddle's "on" end: it rocks over.
+    "TurnOnSwitch": PressPlan("switch/rocker", (0.03, 0.0, 0.006), pitch=math.radians(50)),
+}
+
+
+def make_expert(env: DexEnv) -> Expert:
+    """The expert for `env`'s task, or an error naming the tasks that have one."""
+    name = env.task.name
+    if name in PLANS:
+        return GraspExpert(env, PLANS[name])
+    if name in PRESSES:
+        return PressExpert(env, PRESSES[name])
+    raise ValueError(f"no expert for task {name!r} yet; experts exist for "
+                     f"{', '.join(sorted({*PLANS, *PRESSES}))}")
+
+
+__all__ = ["Expert", "make_expert"]

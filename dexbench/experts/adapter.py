@@ -1,0 +1,90 @@
+"""Hand commands -> joint targets, for any embodiment.
+
+Experts think in palm poses and grasp closure; this module turns those into the
+embodiment's absolute joint targets. The mount (floating wrist or arm) goes through the
+same damped least-squares IK on its joints either way, so one expert serves every mount;
+the fingers blend between the hand's `open` pose and a synergy (`power`, `pinch`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import torch
+
+from dexbench.embodiments.ik import solve_site_pose
+from dexbench.envs.dex_env import DexEnv
+
+IK_ITERATIONS = 10
+
+
+@dataclass
+class HandCommand:
+    """What one hand should do in every env: palm site pose and finger closure.
+
+    `pos` (N, 3) world; `rot` (N, 3, 3) the hand frame's axes as columns (x along the
+    fingers, z the palm normal's opposite side: see `HandSpec.grasp_offset`);
+    `closure` (N,) in [0, 1] from `open` to `synergy`.
+    """
+
+    pos: np.ndarray
+    rot: np.ndarray
+    closure: np.ndarray
+    synergy: str = "power"
+
+
+class ActionAdapter:
+    """Solves mount IK per env (warm-started from the last solution) and blends fingers."""
+
+    def __init__(self, env: DexEnv) -> None:
+        self.env = env
+        model = env.scene.model
+        self.model = model
+        emb = env.embodiment
+        self._scratch = mujoco.MjData(model)
+        self._sides = {}
+        joint_of = {model.actuator(a).name: model.joint(model.actuator_trnid[a, 0]).name
+                    for a in range(model.nu)
+                    if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
+        for side, layout in emb.sides.items():
+            mount = [emb.actuators.index(a) for a in emb.actuators
+                     if a.startswith(f"{side}/") and joint_of.get(a) in layout.mount_joints]
+            hand = [emb.actuators.index(a) for a in emb.actuators
+                    if a.startswith(f"{side}/hand/")]
+            joints = [joint_of[emb.actuators[i]] for i in mount]
+            self._sides[side] = (layout.palm_site, joints, np.array(mount), np.array(hand))
+        self._poses = emb.poses
+        self._solution: dict[str, np.ndarray] = {}
+
+    def reset(self, env_ids: np.ndarray) -> None:
+        """Forget warm starts of these envs (their robots are back at home)."""
+        for side, (_, joints, _, _) in self._sides.items():
+            if side in self._solution:
+                qadr = [self.model.joint(j).qposadr[0] for j in joints]
+                qpos = self.env.sim.field("qpos").numpy()
+                self._solution[side][env_ids] = qpos[np.ix_(env_ids, qadr)]
+
+    def actions(self, commands: dict[str, HandCommand]) -> torch.Tensor:
+        """(N, action_dim) joint targets realising `commands` (one per hand side)."""
+        n = self.env.num_envs
+        qpos = self.env.sim.field("qpos").numpy()
+        out = np.repeat(self._poses["home"][None], n, axis=0)
+        data, model = self._scratch, self.model
+        for side, cmd in commands.items():
+            site, joints, mount, hand = self._sides[side]
+            qadr = np.array([model.joint(j).qposadr[0] for j in joints])
+            if side not in self._solution:
+                self._solution[side] = qpos[:, qadr].copy()
+            for i in range(n):
+                data.qpos[:] = qpos[i]
+                data.qpos[qadr] = self._solution[side][i]
+                q, _ = solve_site_pose(model, data, site, joints, cmd.pos[i], cmd.rot[i],
+                                       iterations=IK_ITERATIONS)
+                self._solution[side][i] = q
+            out[:, mount] = self._solution[side]
+            opened, closed = self._poses["open"][hand], self._poses[cmd.synergy][hand]
+            c = np.clip(cmd.closure, 0.0, 1.0)[:, None]
+            out[:, hand] = opened + c * (closed - opened)
+        return torch.as_tensor(out, device=self.env.device)

@@ -1,0 +1,210 @@
+"""Grasp-and-move: approach from above, close a synergy, then lift or carry to a goal.
+
+One closed-loop script for the tasks whose core is "hold one object and move it"
+(PickCube, PickUpStick, RelocateSphere, RelocateObject, StackCube, ...). Each env runs
+its own phase machine; when the object slips out of the hand the env opens, backs off
+and grasps again. Poses are relative to the object (its grasp point and symmetry) and
+the hand's `grasp_offset`, so the script serves every hand and mount.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+import torch
+
+from dexbench.embodiments.hands import HANDS
+from dexbench.envs.dex_env import DexEnv
+from dexbench.envs.rotations import quat_apply
+from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.motion import (
+    HANDSHAKE_ROT,
+    body_yaw,
+    box_yaw,
+    palm_down,
+    pitch_down,
+    step_towards,
+    yawed,
+)
+
+
+class Phase(IntEnum):
+    APPROACH = 0  # above the grasp pose, hand open
+    DESCEND = 1  # down onto the grasp pose
+    CLOSE = 2  # close the synergy in place
+    CARRY = 3  # move the held object where the task wants it
+    RELEASE = 4  # open and back off (a lost grasp, or a placed object)
+    DONE = 5  # placed: stay clear, hand open
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """Where and how to hold the object, and where to take it.
+
+    `point` is the grasp point in the object's body frame, `shift` moves it in the
+    hand frame from where the hand holds a 5 cm cube (its `grasp_offset`) to suit the
+    object's size; `side` grasps (upright cylinders) hold the object in a handshake
+    pose instead of from above, `pitch` (rad) tilts the fingers down from the top grasp
+    (90 deg: hanging, palm towards the object, to hook a handle). `yaw` is "box" (the
+    object's face yaw nearest to the approach), "body" (the object's yaw) or "none".
+    After the grasp the object is lifted `lift` metres, or, with
+    `target(env) -> (N, 3)`, carried until its `goal_point` (body frame) is there; with
+    `release`, the hand then opens and backs off (placing).
+    """
+
+    body: str
+    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    yaw: str = "box"
+    side: bool = False
+    pitch: float = 0.0
+    synergy: str = "power"
+    lift: float = 0.28
+    target: Callable[[DexEnv], np.ndarray] | None = None
+    goal_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    release: bool = False
+
+
+def task_goal(env: DexEnv) -> np.ndarray:
+    """The goal point the task sampled this episode."""
+    return env.view.goal[:, :3].cpu().numpy()
+
+
+APPROACH_HEIGHT = 0.10  # m behind the palm of the grasp pose
+APPROACH_LIFT = 0.03  # m, side grasps also come in from slightly above
+SPEED = 0.45  # m/s palm speed limit in free space
+CAREFUL_SPEED = 0.2  # m/s descending onto the object and carrying it
+TURN_RATE = 3.0  # rad/s
+PAUSE_SECONDS = 0.2  # still, open, at the grasp pose before closing
+CLOSE_SECONDS = 0.5
+SETTLE_SECONDS = 0.5
+LOST_DISTANCE = 0.05  # held point this far from where the hand closed on it: retry
+PLACE_TOLERANCE = 0.01  # m: a placed object is let go within this of its target
+
+
+class GraspExpert:
+    """The grasp-and-move phase machine for the right hand of a single-hand env."""
+
+    def __init__(self, env: DexEnv, plan: GraspPlan, side: str = "right") -> None:
+        self.env, self.plan, self.side = env, plan, side
+        self.adapter = ActionAdapter(env)
+        hand = env.embodiment.name.rsplit("_", 1)[1]
+        self.offset = np.asarray(HANDS[hand].grasp_offset) + np.asarray(plan.shift)
+        model = env.scene.model
+        self._palm_site = model.site(env.embodiment.sides[side].palm_site).id
+        self._dt = env.control_dt
+        n = env.num_envs
+        self.phase = np.zeros(n, dtype=np.int64)
+        self.timer = np.zeros(n)
+        self.closure = np.zeros(n)
+        self.pos = np.zeros((n, 3))
+        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.grasp_pos = np.zeros((n, 3))
+        self.grasp_rot = self.rot.copy()
+        self.lift_from = np.zeros((n, 3))
+        self.placed = np.zeros(n, dtype=bool)
+        self.held = np.zeros((n, 3))
+
+    def _palm(self) -> tuple[np.ndarray, np.ndarray]:
+        sim = self.env.sim
+        pos = sim.field("site_xpos")[:, self._palm_site].numpy().copy()
+        rot = sim.field("site_xmat")[:, self._palm_site].numpy().reshape(-1, 3, 3).copy()
+        return pos, rot
+
+    def _object_point(self, local: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+        view = self.env.view
+        pos = view.body_pos(self.plan.body)
+        quat = view.body_quat(self.plan.body)
+        offset = torch.as_tensor(local, dtype=pos.dtype).expand(pos.shape)
+        return (pos + quat_apply(quat, offset)).numpy(), quat.numpy()
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        pos, rot = self._palm()
+        self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
+        self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0
+        self.placed[ids] = False
+        self.adapter.reset(ids)
+
+    def _plan_grasp(self, ids: np.ndarray, point: np.ndarray, quat: np.ndarray) -> None:
+        yaw = {"box": box_yaw, "body": body_yaw,
+               "none": lambda q: np.zeros(len(q))}[self.plan.yaw](quat[ids])
+        rot = yawed(HANDSHAKE_ROT, yaw) if self.plan.side else palm_down(yaw)
+        rot = rot @ pitch_down(self.plan.pitch)
+        self.grasp_rot[ids] = rot
+        self.grasp_pos[ids] = point[ids] - rot @ self.offset
+
+    def act(self) -> torch.Tensor:
+        point, quat = self._object_point(self.plan.point)
+        self.timer += self._dt
+        phase = self.phase
+        target_pos, target_rot = self.grasp_pos.copy(), self.grasp_rot.copy()
+
+        fresh = (phase == Phase.APPROACH) & (self.timer <= self._dt)
+        if fresh.any():
+            self._plan_grasp(np.flatnonzero(fresh), point, quat)
+        # Follow the object until the fingers close (its yaw is kept from the plan).
+        tracking = (phase == Phase.APPROACH) | (phase == Phase.DESCEND)
+        self.grasp_pos[tracking] = (point - self.grasp_rot @ self.offset)[tracking]
+        target_pos[tracking] = self.grasp_pos[tracking]
+        approach = phase == Phase.APPROACH
+        # Approach from behind the palm: above for top grasps, from the side for side ones.
+        above = self.grasp_pos - APPROACH_HEIGHT * self.grasp_rot[:, :, 2]
+        above[:, 2] += APPROACH_LIFT * self.plan.side
+        target_pos[approach] = above[approach]
+        near = np.linalg.norm(self.pos - above, axis=1) < 0.01
+        self._advance(approach & ((near & (self.timer > 0.3)) | (self.timer > 3.0)),
+                      Phase.DESCEND)
+
+        descend = phase == Phase.DESCEND
+        arrived = np.linalg.norm(self.pos - self.grasp_pos, axis=1) < 0.005
+        self._advance(descend & (arrived | (self.timer > 2.0)), Phase.CLOSE)
+
+        close = phase == Phase.CLOSE
+        closing = np.clip((self.timer - PAUSE_SECONDS) / CLOSE_SECONDS, 0.0, 1.0)
+        self.closure[close] = closing[close]
+        done = close & (self.timer > PAUSE_SECONDS + CLOSE_SECONDS + SETTLE_SECONDS)
+        self.lift_from[done] = self.pos[done]
+        # Where the closed hand actually holds the object, in the hand frame.
+        self.held[done] = np.einsum("nji,nj->ni", self.rot, point - self.pos)[done]
+        self._advance(done, Phase.CARRY)
+
+        carry = phase == Phase.CARRY
+        if carry.any():
+            expected = self.pos + np.einsum("nij,nj->ni", self.rot, self.held)
+            lost = carry & (np.linalg.norm(point - expected, axis=1) > LOST_DISTANCE)
+            if self.plan.target is None:
+                target_pos[carry] = (self.lift_from + np.array([0.0, 0.0, self.plan.lift]))[carry]
+            else:
+                goal_point, _ = self._object_point(self.plan.goal_point)
+                error = self.plan.target(self.env) - goal_point
+                target_pos[carry] = (self.pos + error)[carry]
+                if self.plan.release:
+                    placed = carry & (np.linalg.norm(error, axis=1) < PLACE_TOLERANCE)
+                    self.placed |= placed
+                    lost |= placed
+            self._advance(lost, Phase.RELEASE)
+
+        release = phase == Phase.RELEASE
+        self.closure[release] = np.maximum(0.0, 1.0 - self.timer[release] / 0.3)
+        target_pos[release] = self.pos[release] + np.array([0.0, 0.0, 0.05])
+        target_rot[release] = self.rot[release]
+        released = release & (self.timer > 0.6)
+        self._advance(released & ~self.placed, Phase.APPROACH)
+        self._advance(released & self.placed, Phase.DONE)
+        done = phase == Phase.DONE
+        target_pos[done], target_rot[done] = self.pos[done], self.rot[done]
+
+        careful = (phase == Phase.DESCEND) | (phase == Phase.CARRY)
+        speed = np.where(careful, CAREFUL_SPEED, SPEED)[:, None] * self._dt
+        self.pos, self.rot = step_towards(self.pos, self.rot, target_pos, target_rot,
+                                          speed, TURN_RATE * self._dt)
+        command = HandCommand(self.pos, self.rot, self.closure, self.plan.synergy)
+        return self.adapter.actions({self.side: command})
+
+    def _advance(self, mask: np.ndarray, phase: Phase) -> None:
+        self.phase[mask] = phase
+        self.timer[mask] = 0.0

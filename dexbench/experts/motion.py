@@ -1,0 +1,66 @@
+"""Small pose utilities experts share: yaw frames and speed-limited motion."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from dexbench.embodiments.builder import HOME_PALM_ROT
+
+# A right hand's handshake pose: fingers +x, palm facing +y, thumb up. A vertical
+# cylinder at the grasp offset then lies across the palm, as in a power grasp of a glass.
+HANDSHAKE_ROT = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
+
+
+def yawed(base: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) hand frames: `base` (3, 3) turned about world z by `yaw` (N,)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    rz = np.zeros((len(yaw), 3, 3))
+    rz[:, 0, 0], rz[:, 0, 1], rz[:, 1, 0], rz[:, 1, 1], rz[:, 2, 2] = c, -s, s, c, 1.0
+    return rz @ base
+
+
+def palm_down(yaw: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) hand frames palm-down with the fingers along world yaw `yaw` (N,)."""
+    return yawed(HOME_PALM_ROT, yaw)
+
+
+def body_yaw(quat: np.ndarray) -> np.ndarray:
+    """(N,) yaw about world z of bodies with orientations `quat` (N, 4) (w, x, y, z)."""
+    w, x, y, z = quat.T
+    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def box_yaw(quat: np.ndarray) -> np.ndarray:
+    """(N,) yaw of a box about world z, folded into [-pi/4, pi/4] (its 4-fold symmetry)."""
+    return (body_yaw(quat) + np.pi / 4) % (np.pi / 2) - np.pi / 4
+
+
+def pitch_down(angle: float) -> np.ndarray:
+    """(3, 3) turn about the hand's y axis tilting the fingers towards the palm side."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+
+
+def step_towards(pos: np.ndarray, rot: np.ndarray, target_pos: np.ndarray,
+                 target_rot: np.ndarray, max_dist: float | np.ndarray, max_angle: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Move poses toward targets by at most `max_dist` (m; scalar or (N, 1)) and
+    `max_angle` (rad)."""
+    delta = target_pos - pos
+    norm = np.linalg.norm(delta, axis=1, keepdims=True)
+    new_pos = pos + delta * np.minimum(1.0, max_dist / np.maximum(norm, 1e-9))
+    new_rot = rot.copy()
+    quat, err, vel = np.zeros(4), np.zeros(4), np.zeros(3)
+    for i in range(len(pos)):
+        mujoco.mju_mat2Quat(err, (target_rot[i] @ rot[i].T).ravel())
+        mujoco.mju_quat2Vel(vel, err, 1.0)
+        angle = np.linalg.norm(vel)
+        if angle < 1e-9:
+            new_rot[i] = target_rot[i]
+            continue
+        mujoco.mju_axisAngle2Quat(quat, vel / angle, min(angle, max_angle))
+        step = np.zeros(9)
+        mujoco.mju_quat2Mat(step, quat)
+        new_rot[i] = step.reshape(3, 3) @ rot[i]
+    return new_pos, new_rot

@@ -1,0 +1,92 @@
+"""Press: bring the palm or the finger pads above a point of an object and push down.
+
+For buttons, rocker switches and similar: the hand stays open (or in a given synergy),
+comes down on the task's functional point and keeps pushing until the task succeeds.
+Where the hand touches is measured from the hand itself (palm site or mean fingertip
+in the hand frame), so the script serves every hand and mount.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
+
+HOVER = 0.08  # m above the point before pressing
+PRESS_DEPTH = 0.05  # m the command goes below the point: the push
+SPEED = 0.4  # m/s in the air
+PRESS_SPEED = 0.08  # m/s while pressing
+
+
+@dataclass(frozen=True)
+class PressPlan:
+    """`body`/`point`: where to press (point in the body frame); `with_fingers` presses
+    with the mean fingertip rather than the palm; `yaw` turns the fingers (rad) from
+    the object's x axis, `pitch` tilts them down (rad) so only the tips touch."""
+
+    body: str
+    point: tuple[float, float, float]
+    with_fingers: bool = True
+    yaw: float = 0.0
+    pitch: float = 0.0
+
+
+class PressExpert:
+    """Hover over the point, then press down slowly and keep pressing."""
+
+    def __init__(self, env: DexEnv, plan: PressPlan, side: str = "right") -> None:
+        self.env, self.plan, self.side = env, plan, side
+        self.adapter = ActionAdapter(env)
+        layout = env.embodiment.sides[side]
+        model = env.scene.model
+        self._palm = model.site(layout.palm_site).id
+        self._tips = [model.site(s).id for s in layout.fingertip_sites]
+        n = env.num_envs
+        self.pos = np.zeros((n, 3))
+        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.contact = np.zeros((n, 3))  # pressing point in the hand frame
+        self.pressing = np.zeros(n, dtype=bool)
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        sim = self.env.sim
+        pos = sim.field("site_xpos").numpy()
+        rot = sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3)
+        self.pos[ids], self.rot[ids] = pos[ids, self._palm], rot[ids]
+        if self.plan.with_fingers:
+            tip = pos[ids][:, self._tips].mean(axis=1) - pos[ids, self._palm]
+            self.contact[ids] = np.einsum("nji,nj->ni", rot[ids], tip)
+        else:
+            self.contact[ids] = 0.0
+        self.pressing[ids] = False
+        self.adapter.reset(ids)
+
+    def act(self) -> torch.Tensor:
+        view = self.env.view
+        body_quat = view.body_quat(self.plan.body).numpy()
+        point = view.point_pos(self.plan.body, self.plan.point).numpy()
+        rot = palm_down(body_yaw(body_quat) + self.plan.yaw) @ pitch_down(self.plan.pitch)
+        palm_at_point = point - np.einsum("nij,nj->ni", rot, self.contact)
+        hover = palm_at_point + [0.0, 0.0, HOVER]
+        arrived = np.linalg.norm(self.pos - hover, axis=1) < 0.01
+        self.pressing |= arrived & (np.abs(self._turn(rot)) < 0.05)
+        target = np.where(self.pressing[:, None], palm_at_point - [0.0, 0.0, PRESS_DEPTH],
+                          hover)
+        speed = np.where(self.pressing, PRESS_SPEED, SPEED) * self.env.control_dt
+        new_pos, self.rot = step_towards(self.pos, self.rot, target, rot, 1.0,
+                                         3.0 * self.env.control_dt)
+        step = new_pos - self.pos
+        norm = np.maximum(np.linalg.norm(step, axis=1), 1e-9)
+        self.pos = self.pos + step * np.minimum(1.0, speed / norm)[:, None]
+        closure = np.zeros(self.env.num_envs)
+        return self.adapter.actions({self.side: HandCommand(self.pos, self.rot, closure)})
+
+    def _turn(self, target_rot: np.ndarray) -> np.ndarray:
+        """Angle (rad) still to turn from the commanded to the target orientation."""
+        cos = (np.einsum("nij,nij->n", self.rot, target_rot) - 1) / 2
+        return np.arccos(np.clip(cos, -1.0, 1.0))
