@@ -303,6 +303,7 @@ def test_paper_protocol_plans_every_hand_on_the_default_mount():
         *[("PickCube", f"floating_{h}", 2) for h in others],
         ("BimanualLiftTray", "bimanual_floating_shadow", 50),
         *[("BimanualLiftTray", f"bimanual_floating_{h}", 2) for h in others]]
+    assert collect_cli.paper_plan(["PickCube"], 5, 0) == [("PickCube", "floating_shadow", 5)]
 
 
 def test_collect_command_protocol_writes_datasets_and_summary(tmp_path, monkeypatch, capsys):

@@ -72,7 +72,7 @@ def collect_one(cfg: DictConfig, make_expert: ExpertFactory, on_episode=None) ->
 
 def paper_plan(tasks: list[str], num_demos: int, other_hands: int) -> list[tuple[str, str, int]]:
     """(task, embodiment, demos): the default embodiment, then every other hand on its
-    mount (and arity)."""
+    mount (and arity); entries asking for no demos are left out."""
     plan = []
     for task in tasks:
         default = task_class(task).default_embodiment
@@ -81,7 +81,7 @@ def paper_plan(tasks: list[str], num_demos: int, other_hands: int) -> list[tuple
         plan += [(task, name, other_hands) for name in embodiment_names()
                  if name != default and parse_embodiment(name).mount == mount.mount
                  and parse_embodiment(name).bimanual == mount.bimanual]
-    return plan
+    return [entry for entry in plan if entry[2] > 0]
 
 
 def run_protocol(cfg: DictConfig, make_expert: ExpertFactory) -> dict:

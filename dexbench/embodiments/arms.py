@@ -61,6 +61,6 @@ ARMS: dict[str, ArmSpec] = {
         entry="xarm7_nohand",
         seed_qpos=(0.0, 0.0, 0.0, 1.2, 0.0, 1.2, 0.0),
         hand_rot=INLINE_MOUNT,
-        flange_reach=0.35,
+        flange_reach=0.30,
     ),
 }

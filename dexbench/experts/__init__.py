@@ -29,8 +29,12 @@ PLANS: dict[str, GraspPlan] = {
     "StackCube": GraspPlan("cube", target=_on_base_cube, release=True),
     "RelocateSphere": GraspPlan("sphere", shift=(0.025, 0.0, 0.0), yaw="none",
                                 target=task_goal),
-    "PickUpStick": GraspPlan("stick", point=(0.0, 0.0, 0.09), yaw="none", side=True),
-    "RelocateObject": GraspPlan("bottle", point=(0.0, 0.0, 0.07), yaw="none", side=True,
+    # Thin and upright: held near its top, the palm a little lower than for a cube.
+    "PickUpStick": GraspPlan("stick", point=(0.0, 0.0, 0.13), shift=(0.01, 0.0, -0.02),
+                             yaw="none"),
+    # Tall: fingers tilted down so they straddle the shoulder instead of landing on the cap.
+    "RelocateObject": GraspPlan("bottle", point=(0.0, 0.0, 0.12), shift=(0.01, 0.0, 0.0),
+                                yaw="none", pitch=0.6,
                                 target=task_goal, goal_point=(0.0, 0.0, 0.09)),
     # Hand hanging in front of the handle, palm towards the cabinet: the fingers curl
     # behind the bar and the hand pulls along the drawer's axis.

@@ -82,7 +82,10 @@ PAUSE_SECONDS = 0.2  # still, open, at the grasp pose before closing
 CLOSE_SECONDS = 0.5
 SETTLE_SECONDS = 0.5
 LOST_DISTANCE = 0.05  # held point this far from where the hand closed on it: retry
-PLACE_TOLERANCE = 0.01  # m: a placed object is let go within this of its target
+PLACE_TOLERANCE = 0.006  # m: a placed object is let go within this of its target
+OPEN_SECONDS = 0.4
+CARRY_HEIGHT = 0.12  # m above the grasp: carrying height while far from the target
+CARRY_NEAR = 0.02  # m: horizontally this close to the target, the object goes down
 
 
 class GraspExpert:
@@ -169,18 +172,25 @@ class GraspExpert:
         done = close & (self.timer > PAUSE_SECONDS + CLOSE_SECONDS + SETTLE_SECONDS)
         self.lift_from[done] = self.pos[done]
         # Where the closed hand actually holds the object, in the hand frame.
-        self.held[done] = np.einsum("nji,nj->ni", self.rot, point - self.pos)[done]
+        palm, palm_rot = self._palm()  # the actual hand: an arm may lag its command
+        self.held[done] = np.einsum("nji,nj->ni", palm_rot, point - palm)[done]
         self._advance(done, Phase.CARRY)
 
         carry = phase == Phase.CARRY
         if carry.any():
-            expected = self.pos + np.einsum("nij,nj->ni", self.rot, self.held)
+            expected = palm + np.einsum("nij,nj->ni", palm_rot, self.held)
             lost = carry & (np.linalg.norm(point - expected, axis=1) > LOST_DISTANCE)
             if self.plan.target is None:
                 target_pos[carry] = (self.lift_from + np.array([0.0, 0.0, self.plan.lift]))[carry]
             else:
                 goal_point, _ = self._object_point(self.plan.goal_point)
-                error = self.plan.target(self.env) - goal_point
+                goal = self.plan.target(self.env)
+                # Travel above the table's clutter; come down only over the target.
+                far = np.linalg.norm((goal - goal_point)[:, :2], axis=1) > CARRY_NEAR
+                goal[:, 2] = np.where(far, np.maximum(goal[:, 2], goal_point[:, 2]
+                                                      + (self.lift_from[:, 2] + CARRY_HEIGHT
+                                                         - self.pos[:, 2])), goal[:, 2])
+                error = goal - goal_point
                 target_pos[carry] = (self.pos + error)[carry]
                 if self.plan.release:
                     placed = carry & (np.linalg.norm(error, axis=1) < PLACE_TOLERANCE)
@@ -189,10 +199,13 @@ class GraspExpert:
             self._advance(lost, Phase.RELEASE)
 
         release = phase == Phase.RELEASE
-        self.closure[release] = np.maximum(0.0, 1.0 - self.timer[release] / 0.3)
-        target_pos[release] = self.pos[release] + np.array([0.0, 0.0, 0.05])
+        # Open in place first, then back off: rising while open drags the object along.
+        self.closure[release] = np.maximum(0.0, 1.0 - self.timer[release] / OPEN_SECONDS)
+        rising = self.timer > OPEN_SECONDS
+        target_pos[release] = self.pos[release] + np.array([0.0, 0.0, 0.05]) * rising[
+            release, None]
         target_rot[release] = self.rot[release]
-        released = release & (self.timer > 0.6)
+        released = release & (self.timer > 2 * OPEN_SECONDS)
         self._advance(released & ~self.placed, Phase.APPROACH)
         self._advance(released & self.placed, Phase.DONE)
         done = phase == Phase.DONE
