@@ -53,5 +53,5 @@ def test_expert_solves_task_on_floating_shadow(task):
 
 def test_expert_for_a_task_without_one_names_those_that_exist():
     env = make_env("MakeCoffee", num_envs=1)
-    with pytest.raises(ValueError, match="experts exist for .*PickCube"):
+    with pytest.raises(ValueError, match=r"experts exist for .*PickCube"):
         make_expert(env)
