@@ -8,6 +8,7 @@ from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.experts.grasp import GraspExpert, GraspPlan, task_goal
 from dexbench.experts.press import PressExpert, PressPlan
+from dexbench.experts.turn import TurnExpert, TurnPlan
 
 
 def _on_base_cube(env: DexEnv):
@@ -48,6 +49,10 @@ PRESSES: dict[str, PressPlan] = {
     "TurnOnSwitch": PressPlan("switch/rocker", (0.03, 0.0, 0.006), pitch=math.radians(50)),
 }
 
+TURNS: dict[str, TurnPlan] = {
+    "OpenFaucet": TurnPlan("faucet/handle", (-0.08, 0.0, 0.015), "faucet/handle"),
+}
+
 
 def make_expert(env: DexEnv) -> Expert:
     """The expert for `env`'s task, or an error naming the tasks that have one."""
@@ -56,8 +61,10 @@ def make_expert(env: DexEnv) -> Expert:
         return GraspExpert(env, PLANS[name])
     if name in PRESSES:
         return PressExpert(env, PRESSES[name])
+    if name in TURNS:
+        return TurnExpert(env, TURNS[name])
     raise ValueError(f"no expert for task {name!r} yet; experts exist for "
-                     f"{', '.join(sorted({*PLANS, *PRESSES}))}")
+                     f"{', '.join(sorted({*PLANS, *PRESSES, *TURNS}))}")
 
 
 __all__ = ["Expert", "make_expert"]

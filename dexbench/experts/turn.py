@@ -1,0 +1,88 @@
+"""Turn a lever: push its tip around its hinge with the finger pads.
+
+For faucet handles and similar levers on a vertical hinge. The hand hangs its fingers
+down beside the lever tip, pads facing the way the tip must go, and keeps its pads a
+little ahead of the tip along the arc until the task succeeds. The contact point is
+measured on the hand itself (mean fingertip), so the script serves every hand and mount.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.motion import palm_down, pitch_down, step_towards
+
+SPEED = 0.4  # m/s in the air
+PUSH_SPEED = 0.1  # m/s along the arc
+HOVER = 0.08  # m above the lever before going down beside it
+LEAD = 0.03  # m the pads aim ahead of the tip along the arc
+BESIDE = 0.025  # m the pads start behind the tip, on the side they push from
+
+
+@dataclass(frozen=True)
+class TurnPlan:
+    """`body`/`tip`: the lever body and its tip point (body frame); `hinge`: the
+    hinge joint (vertical axis), turned towards its upper limit by `direction` +1."""
+
+    body: str
+    tip: tuple[float, float, float]
+    hinge: str
+    direction: float = 1.0
+
+
+class TurnExpert:
+    """Go down beside the lever tip, then push it along its arc."""
+
+    def __init__(self, env: DexEnv, plan: TurnPlan, side: str = "right") -> None:
+        self.env, self.plan, self.side = env, plan, side
+        self.adapter = ActionAdapter(env)
+        model = env.scene.model
+        layout = env.embodiment.sides[side]
+        self._palm = model.site(layout.palm_site).id
+        self._tips = [model.site(s).id for s in layout.fingertip_sites[1:]]  # no thumb
+        self._hinge_body = model.body(model.joint(plan.hinge).bodyid[0]).name
+        n = env.num_envs
+        self.pos = np.zeros((n, 3))
+        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.pads = np.zeros((n, 3))  # finger pads in the hand frame
+        self.stage = np.zeros(n, dtype=np.int64)  # 0 hover, 1 down beside, 2 push
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        sim = self.env.sim
+        pos = sim.field("site_xpos").numpy()
+        rot = sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3)
+        self.pos[ids], self.rot[ids] = pos[ids, self._palm], rot[ids]
+        tip = pos[ids][:, self._tips].mean(axis=1) - pos[ids, self._palm]
+        self.pads[ids] = np.einsum("nji,nj->ni", rot[ids], tip)
+        self.stage[ids] = 0
+        self.adapter.reset(ids)
+
+    def act(self) -> torch.Tensor:
+        view = self.env.view
+        tip = view.point_pos(self.plan.body, self.plan.tip).numpy()
+        pivot = view.body_pos(self._hinge_body).numpy()
+        radial = tip - pivot
+        radial[:, 2] = 0.0
+        radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
+        tangent = self.plan.direction * np.cross([0.0, 0.0, 1.0], radial)
+        # Fingers hanging, pads (palm side) facing the push direction.
+        yaw = np.arctan2(-tangent[:, 1], -tangent[:, 0])
+        rot = palm_down(yaw) @ pitch_down(np.pi / 2)
+        beside = tip - BESIDE * tangent
+        ahead = tip + LEAD * tangent
+        pads_world = np.einsum("nij,nj->ni", rot, self.pads)
+        goal = {0: beside + [0.0, 0.0, HOVER], 1: beside, 2: ahead}
+        target = np.stack([goal[int(s)][i] for i, s in enumerate(self.stage)]) - pads_world
+        close = np.linalg.norm(self.pos - target, axis=1) < 0.01
+        self.stage[(self.stage < 2) & close] += 1
+        speed = np.where(self.stage == 2, PUSH_SPEED, SPEED)[:, None] * self.env.control_dt
+        self.pos, self.rot = step_towards(self.pos, self.rot, target, rot, speed,
+                                          3.0 * self.env.control_dt)
+        closure = np.zeros(self.env.num_envs)
+        return self.adapter.actions({self.side: HandCommand(self.pos, self.rot, closure)})
