@@ -78,6 +78,7 @@ APPROACH_LIFT = 0.03  # m, side grasps also come in from slightly above
 SPEED = 0.45  # m/s palm speed limit in free space
 CAREFUL_SPEED = 0.2  # m/s descending onto the object and carrying it
 TURN_RATE = 3.0  # rad/s
+ARRIVED = 0.008  # m: the actual palm this close to the grasp pose starts the closing
 PAUSE_SECONDS = 0.2  # still, open, at the grasp pose before closing
 CLOSE_SECONDS = 0.5
 SETTLE_SECONDS = 0.5
@@ -163,8 +164,11 @@ class GraspExpert:
                       Phase.DESCEND)
 
         descend = phase == Phase.DESCEND
-        arrived = np.linalg.norm(self.pos - self.grasp_pos, axis=1) < 0.005
-        self._advance(descend & (arrived | (self.timer > 2.0)), Phase.CLOSE)
+        # Close once the hand itself is there: an arm may trail its command.
+        palm, _ = self._palm()
+        arrived = ((np.linalg.norm(self.pos - self.grasp_pos, axis=1) < 0.005)
+                   & (np.linalg.norm(palm - self.grasp_pos, axis=1) < ARRIVED))
+        self._advance(descend & (arrived | (self.timer > 2.5)), Phase.CLOSE)
 
         close = phase == Phase.CLOSE
         closing = np.clip((self.timer - PAUSE_SECONDS) / CLOSE_SECONDS, 0.0, 1.0)
