@@ -36,9 +36,11 @@ def test_adapter_puts_the_palm_where_commanded(embodiment):
     np.testing.assert_allclose(ctrl[1, hand], env.embodiment.poses["power"][hand])
 
 
-@pytest.mark.parametrize("task", ["PickCube", "PushButton", "TurnOnSwitch"])
-def test_expert_solves_task_on_floating_shadow(task):
-    env = make_env(task, "floating_shadow", num_envs=4, seed=3)
+@pytest.mark.parametrize(("task", "embodiment"), [
+    ("PickCube", "floating_shadow"), ("PushButton", "floating_shadow"),
+    ("TurnOnSwitch", "floating_shadow"), ("BimanualLiftTray", "bimanual_floating_shadow")])
+def test_expert_solves_task_on_floating_shadow(task, embodiment):
+    env = make_env(task, embodiment, num_envs=4, seed=3)
     env.reset()
     expert = make_expert(env)
     expert.reset(torch.arange(4))

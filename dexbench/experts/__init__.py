@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
+
+import torch
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
-from dexbench.experts.grasp import GraspExpert, GraspPlan, task_goal
+from dexbench.experts.bimanual import TwoHandLiftExpert, TwoHandPlan
+from dexbench.experts.grasp import GraspExpert, GraspPlan, Phase, task_goal
 from dexbench.experts.press import PressExpert, PressPlan
+from dexbench.experts.sequence import SequenceExpert
 from dexbench.experts.turn import TurnExpert, TurnPlan
 
 
@@ -40,7 +45,8 @@ PLANS: dict[str, GraspPlan] = {
     # Hand hanging in front of the handle, palm towards the cabinet: the fingers curl
     # behind the bar and the hand pulls along the drawer's axis.
     "OpenDrawer": GraspPlan("cabinet/drawer", point=DRAWER_HANDLE, yaw="body",
-                            pitch=math.pi / 2, target=_drawer_pulled, goal_point=DRAWER_HANDLE),
+                            pitch=math.pi / 2, target=_drawer_pulled, goal_point=DRAWER_HANDLE,
+                            carry_high=False),
 }
 
 PRESSES: dict[str, PressPlan] = {
@@ -54,17 +60,45 @@ TURNS: dict[str, TurnPlan] = {
 }
 
 
+def _drawer_then_ball(env: DexEnv) -> Expert:
+    """Open the drawer all the way and let go (it stays open), then lift the ball."""
+    ball = GraspPlan("sphere", shift=PLANS["RelocateSphere"].shift, yaw="none")
+    opened = dataclasses.replace(PLANS["OpenDrawer"], let_go=lambda e: (
+        e.task.primary.progress(e.view) >= DRAWER_OPEN / e.task.primary.threshold).cpu().numpy())
+    drawer = GraspExpert(env, opened)
+    return SequenceExpert(env, [
+        (drawer, lambda e: torch.as_tensor(drawer.phase == Phase.DONE)),
+        (GraspExpert(env, ball), lambda e: e.task.success(e.view))])
+
+
+DRAWER_OPEN = 0.95  # of its travel: well past the task's threshold before letting go
+SEQUENCES = {"OpenDrawer_RelocateSphere": _drawer_then_ball}
+
+
+TWO_HANDS: dict[str, TwoHandPlan] = {
+    # Each hand hooks one short rim wall, fingers along the tray's long axis. Centred
+    # between the fingers, the tray hangs ~5 deg low on the thumb side; with its centre
+    # line 3 cm towards the little finger (hand frame y = +0.03) it hangs level.
+    "BimanualLiftTray": TwoHandPlan("tray", {"right": "grip_xneg", "left": "grip_xpos"},
+                                    shift=(0.0, 0.043, 0.0)),
+}
+
+
 def make_expert(env: DexEnv) -> Expert:
     """The expert for `env`'s task, or an error naming the tasks that have one."""
     name = env.task.name
+    if name in SEQUENCES:
+        return SEQUENCES[name](env)
     if name in PLANS:
         return GraspExpert(env, PLANS[name])
     if name in PRESSES:
         return PressExpert(env, PRESSES[name])
     if name in TURNS:
         return TurnExpert(env, TURNS[name])
+    if name in TWO_HANDS:
+        return TwoHandLiftExpert(env, TWO_HANDS[name])
     raise ValueError(f"no expert for task {name!r} yet; experts exist for "
-                     f"{', '.join(sorted({*PLANS, *PRESSES, *TURNS}))}")
+                     f"{', '.join(sorted({*PLANS, *PRESSES, *TURNS, *SEQUENCES, *TWO_HANDS}))}")
 
 
 __all__ = ["Expert", "make_expert"]

@@ -52,7 +52,9 @@ class GraspPlan:
     object's face yaw nearest to the approach), "body" (the object's yaw) or "none".
     After the grasp the object is lifted `lift` metres, or, with
     `target(env) -> (N, 3)`, carried until its `goal_point` (body frame) is there; with
-    `release`, the hand then opens and backs off (placing).
+    `release`, the hand then opens and backs off (placing), as it does whenever
+    `let_go(env) -> (N,) bool` holds while carrying. `carry_high` lifts the
+    object over the table's clutter until it is above its target (off for pulling).
     """
 
     body: str
@@ -66,6 +68,8 @@ class GraspPlan:
     target: Callable[[DexEnv], np.ndarray] | None = None
     goal_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
     release: bool = False
+    let_go: Callable[[DexEnv], np.ndarray] | None = None
+    carry_high: bool = True
 
 
 def task_goal(env: DexEnv) -> np.ndarray:
@@ -74,6 +78,7 @@ def task_goal(env: DexEnv) -> np.ndarray:
 
 
 APPROACH_HEIGHT = 0.10  # m behind the palm of the grasp pose
+TRAVEL_RISE = 0.10  # m the hand rises from where it was before travelling across
 APPROACH_LIFT = 0.03  # m, side grasps also come in from slightly above
 SPEED = 0.45  # m/s palm speed limit in free space
 CAREFUL_SPEED = 0.2  # m/s descending onto the object and carrying it
@@ -85,6 +90,7 @@ SETTLE_SECONDS = 0.5
 LOST_DISTANCE = 0.05  # held point this far from where the hand closed on it: retry
 PLACE_TOLERANCE = 0.006  # m: a placed object is let go within this of its target
 OPEN_SECONDS = 0.4
+BACK_OFF = 0.06  # m the open hand withdraws after letting go
 CARRY_HEIGHT = 0.12  # m above the grasp: carrying height while far from the target
 CARRY_NEAR = 0.02  # m: horizontally this close to the target, the object goes down
 
@@ -111,6 +117,7 @@ class GraspExpert:
         self.lift_from = np.zeros((n, 3))
         self.placed = np.zeros(n, dtype=bool)
         self.held = np.zeros((n, 3))
+        self.travel_z = np.zeros(n)
 
     def _palm(self) -> tuple[np.ndarray, np.ndarray]:
         sim = self.env.sim
@@ -158,7 +165,16 @@ class GraspExpert:
         # Approach from behind the palm: above for top grasps, from the side for side ones.
         above = self.grasp_pos - APPROACH_HEIGHT * self.grasp_rot[:, :, 2]
         above[:, 2] += APPROACH_LIFT * self.plan.side
-        target_pos[approach] = above[approach]
+        # Travel at a height clear of what the hand just held, rising (without turning)
+        # before moving across, so it sweeps nothing over: a hand leaving a drawer
+        # handle would otherwise push the drawer shut.
+        self.travel_z[fresh] = np.maximum(above[:, 2], self.pos[:, 2] + TRAVEL_RISE)[fresh]
+        across = np.linalg.norm((self.pos - above)[:, :2], axis=1) > 0.03
+        low = across & (self.pos[:, 2] < self.travel_z - 0.01)
+        waypoint = np.where(across[:, None], np.column_stack([
+            np.where(low[:, None], self.pos[:, :2], above[:, :2]), self.travel_z]), above)
+        target_pos[approach] = waypoint[approach]
+        target_rot[approach & low] = self.rot[approach & low]
         near = np.linalg.norm(self.pos - above, axis=1) < 0.01
         self._advance(approach & ((near & (self.timer > 0.3)) | (self.timer > 3.0)),
                       Phase.DESCEND)
@@ -191,6 +207,7 @@ class GraspExpert:
                 goal = self.plan.target(self.env)
                 # Travel above the table's clutter; come down only over the target.
                 far = np.linalg.norm((goal - goal_point)[:, :2], axis=1) > CARRY_NEAR
+                far &= self.plan.carry_high
                 goal[:, 2] = np.where(far, np.maximum(goal[:, 2], goal_point[:, 2]
                                                       + (self.lift_from[:, 2] + CARRY_HEIGHT
                                                          - self.pos[:, 2])), goal[:, 2])
@@ -200,14 +217,19 @@ class GraspExpert:
                     placed = carry & (np.linalg.norm(error, axis=1) < PLACE_TOLERANCE)
                     self.placed |= placed
                     lost |= placed
+            if self.plan.let_go is not None:
+                done = carry & self.plan.let_go(self.env)
+                self.placed |= done
+                lost |= done
             self._advance(lost, Phase.RELEASE)
 
         release = phase == Phase.RELEASE
         # Open in place first, then back off: rising while open drags the object along.
         self.closure[release] = np.maximum(0.0, 1.0 - self.timer[release] / OPEN_SECONDS)
+        # Backing off is away from the palm side: up for a top grasp, back for a hook.
         rising = self.timer > OPEN_SECONDS
-        target_pos[release] = self.pos[release] + np.array([0.0, 0.0, 0.05]) * rising[
-            release, None]
+        back_off = self.pos - BACK_OFF * self.rot[:, :, 2]
+        target_pos[release] = np.where(rising[:, None], back_off, self.pos)[release]
         target_rot[release] = self.rot[release]
         released = release & (self.timer > 2 * OPEN_SECONDS)
         self._advance(released & ~self.placed, Phase.APPROACH)

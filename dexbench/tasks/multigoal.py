@@ -21,4 +21,5 @@ class OpenDrawerRelocateSphere(MultiGoalTask):
     primary_cls = OpenDrawer
     addon_cls = RelocateSphere
     addon_object = "sphere"
-    addon_placement = Placement((-0.25, -0.05), (-0.35, 0.35))
+    # Beside the cabinet, clear of the drawer's travel (a ball in its way blocks it).
+    addon_placement = Placement((-0.20, 0.0), (0.36, 0.46))

@@ -1,0 +1,220 @@
+"""Two-hand lift: each hand hooks one grip point of an object, both lift it together.
+
+For trays and similar wide objects held at two opposite rims (BimanualLiftTray). Each
+hand comes down palm-down on its grip point with the fingers pointing at the object's
+centre, curls its fingers over and inside the rim, then pulls outward so the curled
+fingers press the rim: the two pulls balance, and friction carries the object. Both
+palms then rise by the same height, which keeps the object level. When the object slips
+(a grip point leaves its hand, or it tilts), both hands open, back off and try again.
+
+Poses are relative to the object's functional points and each hand's `grasp_offset`; the
+left hand's frame is mirrored (its thumb is on the other side of the hand frame's y
+axis), which the script measures from the fingertips instead of assuming.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+import torch
+
+from dexbench.embodiments.hands import HANDS
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.motion import palm_down, step_towards
+from dexbench.tasks.predicates import tilt_deg
+
+
+class Phase(IntEnum):
+    APPROACH = 0  # both hands above their grip poses, open
+    DESCEND = 1  # down onto the grip poses
+    CLOSE = 2  # curl the fingers over the rims
+    PULL = 3  # pull outward: the curled fingers press the rims
+    LIFT = 4  # both palms rise by the same height
+    RELEASE = 5  # a lost grip: open, back off, start again
+
+
+@dataclass(frozen=True)
+class TwoHandPlan:
+    """Which grip point (an `ObjectInfo.points` name) each side hooks, and how.
+
+    `shift` moves the grip point in the right hand's frame from where the hand holds a
+    5 cm cube (mirrored for a mirrored hand); `pull` (m) is how far the closed hands
+    draw back along their fingers, `lift` (m) how high they then rise.
+    """
+
+    body: str
+    grips: dict[str, str]
+    shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    pull: float = 0.025
+    lift: float = 0.27
+
+
+APPROACH_HEIGHT = 0.08  # m behind (above) the palm of the grip pose
+SPEED = 0.5  # m/s palm speed limit in free space
+CAREFUL_SPEED = 0.2  # m/s descending and pulling
+LIFT_SPEED = 0.12  # m/s: slow enough that the fingers keep their hold
+TURN_RATE = 3.0  # rad/s
+NEAR = 0.01  # m: command this close to the pose above the grip counts as there
+ARRIVED = 0.008  # m: actual palms this close to the grip poses start the closing
+PAUSE_SECONDS = 0.2
+CLOSE_SECONDS = 0.6
+SETTLE_SECONDS = 0.3
+PULL_SECONDS = 0.4
+LOST_DISTANCE = 0.04  # m a grip point may move in its hand before the grip counts as lost
+LOST_TILT = 8.0  # deg: the task fails at 10, so regrasp before
+OPEN_SECONDS = 0.4
+
+
+class TwoHandLiftExpert:
+    """The two-hand hook-and-lift phase machine; both hands of an env share one phase."""
+
+    def __init__(self, env: DexEnv, plan: TwoHandPlan) -> None:
+        self.env, self.plan = env, plan
+        self.adapter = ActionAdapter(env)
+        info = env.task.objects[plan.body]
+        self._points = {side: info.points[name] for side, name in plan.grips.items()}
+        self._up = info.axes["up"]
+        model = env.scene.model
+        layouts = env.embodiment.sides
+        self._palm_site = {s: model.site(layouts[s].palm_site).id for s in plan.grips}
+        self._thumb_site = {s: model.site(layouts[s].fingertip_sites[0]).id for s in plan.grips}
+        hand = env.embodiment.name.rsplit("_", 1)[1]
+        self._offset = np.asarray(HANDS[hand].grasp_offset) + np.asarray(plan.shift)
+        self._dt = env.control_dt
+        n = env.num_envs
+        self.phase = np.zeros(n, dtype=np.int64)
+        self.timer = np.zeros(n)
+        self.closure = np.zeros(n)
+        self.height = np.zeros(n)  # how far both palms have risen since the pull
+        eye = np.repeat(np.eye(3)[None], n, axis=0)
+        self.pos = {s: np.zeros((n, 3)) for s in plan.grips}
+        self.rot = {s: eye.copy() for s in plan.grips}
+        self.grip_pos = {s: np.zeros((n, 3)) for s in plan.grips}
+        self.grip_rot = {s: eye.copy() for s in plan.grips}
+        self.held = {s: np.zeros((n, 3)) for s in plan.grips}
+        self.offset = {s: self._offset.copy() for s in plan.grips}
+
+    def _palm(self, side: str) -> tuple[np.ndarray, np.ndarray]:
+        sim, site = self.env.sim, self._palm_site[side]
+        pos = sim.field("site_xpos")[:, site].numpy().copy()
+        rot = sim.field("site_xmat")[:, site].numpy().reshape(-1, 3, 3).copy()
+        return pos, rot
+
+    def _mirror(self, env: int) -> dict[str, float]:
+        """-1 for a side whose thumb lies across the hand frame's y axis from the right
+        hand's (a mirrored frame): its grasp offset's y flips. Read in a just-reset
+        env `env`, whose hands are open."""
+        thumb_y = {}
+        for side in self.plan.grips:
+            pos, rot = self._palm(side)
+            thumb = self.env.sim.field("site_xpos")[:, self._thumb_site[side]].numpy()
+            thumb_y[side] = (rot[env].T @ (thumb[env] - pos[env]))[1]
+        ref = thumb_y.get("right", next(iter(thumb_y.values())))
+        return {s: 1.0 if y * ref >= 0 else -1.0 for s, y in thumb_y.items()}
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        for side, mirror in self._mirror(int(ids[0])).items():
+            self.offset[side] = self._offset * [1.0, mirror, 1.0]
+            pos, rot = self._palm(side)
+            self.pos[side][ids], self.rot[side][ids] = pos[ids], rot[ids]
+        self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0
+        self.adapter.reset(ids)
+
+    def _grip_poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Per side: the grip point (world) and the palm-down hand frame whose fingers
+        point from it at the object's centre."""
+        view = self.env.view
+        centre = view.body_pos(self.plan.body).numpy()
+        poses = {}
+        for side, (body, local) in self._points.items():
+            point = view.point_pos(body, local).numpy()
+            inward = centre - point
+            poses[side] = point, palm_down(np.arctan2(inward[:, 1], inward[:, 0]))
+        return poses
+
+    def act(self) -> torch.Tensor:
+        self.timer += self._dt
+        phase, sides = self.phase, list(self.plan.grips)
+        poses = self._grip_poses()
+        # Follow the object until the fingers close.
+        tracking = (phase == Phase.APPROACH) | (phase == Phase.DESCEND)
+        for side, (point, rot) in poses.items():
+            self.grip_rot[side][tracking] = rot[tracking]
+            self.grip_pos[side][tracking] = (point - rot @ self.offset[side])[tracking]
+        target_pos = {s: self.grip_pos[s].copy() for s in sides}
+        target_rot = {s: self.grip_rot[s].copy() for s in sides}
+        palms = {s: self._palm(s) for s in sides}
+
+        approach = phase == Phase.APPROACH
+        near = approach.copy()
+        for s in sides:
+            above = self.grip_pos[s] - APPROACH_HEIGHT * self.grip_rot[s][:, :, 2]
+            target_pos[s][approach] = above[approach]
+            near &= np.linalg.norm(self.pos[s] - above, axis=1) < NEAR
+        self._advance((near & (self.timer > 0.3)) | (approach & (self.timer > 3.0)),
+                      Phase.DESCEND)
+
+        descend = phase == Phase.DESCEND
+        arrived = descend.copy()
+        for s in sides:
+            arrived &= ((np.linalg.norm(self.pos[s] - self.grip_pos[s], axis=1) < 0.005)
+                        & (np.linalg.norm(palms[s][0] - self.grip_pos[s], axis=1) < ARRIVED))
+        self._advance(arrived | (descend & (self.timer > 2.5)), Phase.CLOSE)
+
+        close = phase == Phase.CLOSE
+        closing = np.clip((self.timer - PAUSE_SECONDS) / CLOSE_SECONDS, 0.0, 1.0)
+        self.closure[close] = closing[close]
+        self._advance(close & (self.timer > PAUSE_SECONDS + CLOSE_SECONDS + SETTLE_SECONDS),
+                      Phase.PULL)
+
+        pull = phase == Phase.PULL
+        for s in sides:
+            back = self.grip_pos[s] - self.plan.pull * self.grip_rot[s][:, :, 0]
+            target_pos[s][pull] = back[pull]
+        pulled = pull & (self.timer > PULL_SECONDS)
+        for s in sides:
+            # Where the closed hand holds its grip point, in the hand frame.
+            point, (palm, palm_rot) = poses[s][0], palms[s]
+            self.held[s][pulled] = np.einsum("nji,nj->ni", palm_rot, point - palm)[pulled]
+            self.grip_pos[s][pulled] = self.pos[s][pulled]  # the lift starts from here
+        self.height[pulled] = 0.0
+        self._advance(pulled, Phase.LIFT)
+
+        lift = phase == Phase.LIFT
+        if lift.any():
+            self.height[lift] = np.minimum(self.height[lift] + LIFT_SPEED * self._dt,
+                                           self.plan.lift)
+            lost = lift & (tilt_deg(self.env.view.axis(*self._up)).numpy() > LOST_TILT)
+            for s in sides:
+                target_pos[s][lift] = self.grip_pos[s][lift] + self.height[lift, None] * [
+                    0.0, 0.0, 1.0]
+                point, (palm, palm_rot) = poses[s][0], palms[s]
+                expected = palm + np.einsum("nij,nj->ni", palm_rot, self.held[s])
+                lost |= lift & (np.linalg.norm(point - expected, axis=1) > LOST_DISTANCE)
+            self._advance(lost, Phase.RELEASE)
+
+        release = phase == Phase.RELEASE
+        # Open in place first, then back off upwards.
+        self.closure[release] = np.maximum(0.0, 1.0 - self.timer[release] / OPEN_SECONDS)
+        rising = (self.timer > OPEN_SECONDS)[release, None]
+        for s in sides:
+            target_pos[s][release] = self.pos[s][release] + [0.0, 0.0, 0.05] * rising
+            target_rot[s][release] = self.rot[s][release]
+        self._advance(release & (self.timer > 2 * OPEN_SECONDS), Phase.APPROACH)
+
+        careful = (phase == Phase.DESCEND) | (phase == Phase.PULL) | (phase == Phase.LIFT)
+        speed = np.where(careful, CAREFUL_SPEED, SPEED)[:, None] * self._dt
+        commands = {}
+        for s in sides:
+            self.pos[s], self.rot[s] = step_towards(self.pos[s], self.rot[s], target_pos[s],
+                                                    target_rot[s], speed, TURN_RATE * self._dt)
+            commands[s] = HandCommand(self.pos[s], self.rot[s], self.closure)
+        return self.adapter.actions(commands)
+
+    def _advance(self, mask: np.ndarray, phase: Phase) -> None:
+        self.phase[mask] = phase
+        self.timer[mask] = 0.0

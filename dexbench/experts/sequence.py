@@ -1,0 +1,48 @@
+"""Run experts one after another, per env: each hands over when its subgoal holds.
+
+For tasks whose parts can be done in turn and then hold (a drawer stays open while the
+hand goes on to lift a ball). The next expert is reset at the hand-over, so it starts
+from wherever the hand is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import torch
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.base import Expert
+
+Subgoal = Callable[[DexEnv], torch.Tensor]
+
+
+class SequenceExpert:
+    """`steps`: (expert, subgoal) pairs; the last subgoal is never consulted."""
+
+    def __init__(self, env: DexEnv, steps: Sequence[tuple[Expert, Subgoal]]) -> None:
+        self.env, self.steps = env, list(steps)
+        self.stage = np.zeros(env.num_envs, dtype=np.int64)
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        self.stage[ids] = 0
+        self.steps[0][0].reset(torch.as_tensor(ids))
+
+    def act(self) -> torch.Tensor:
+        for k, (_, done) in enumerate(self.steps[:-1]):
+            handover = (self.stage == k) & done(self.env).cpu().numpy()
+            if handover.any():
+                self.stage[handover] = k + 1
+                self.steps[k + 1][0].reset(torch.as_tensor(np.flatnonzero(handover)))
+        actions = None
+        for k, (expert, _) in enumerate(self.steps):
+            mine = self.stage == k
+            if not mine.any():
+                continue
+            proposal = expert.act()
+            actions = proposal if actions is None else actions
+            actions[torch.as_tensor(mine, device=proposal.device)] = proposal[
+                torch.as_tensor(mine, device=proposal.device)]
+        return actions
