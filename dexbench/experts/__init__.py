@@ -57,6 +57,10 @@ PRESSES: dict[str, PressPlan] = {
 
 TURNS: dict[str, TurnPlan] = {
     "OpenFaucet": TurnPlan("faucet/handle", (-0.08, 0.0, 0.015), "faucet/handle"),
+    # Fingers tilted down slide under the raised front edge of the lid, from the front,
+    # and lift it up and over; the base's own weight holds it down.
+    "OpenLaptop": TurnPlan("laptop/lid", (-0.22, 0.0, 0.0), "laptop/hinge", direction=-1.0,
+                           pitch=0.6, yaw_body="laptop", approach=(-1.0, 0.0, 0.3)),
 }
 
 

@@ -1,9 +1,10 @@
-"""Turn a lever: push its tip around its hinge with the finger pads.
+"""Turn a hinged part: push its tip around its hinge with the fingers.
 
-For faucet handles and similar levers on a vertical hinge. The hand hangs its fingers
-down beside the lever tip, pads facing the way the tip must go, and keeps its pads a
-little ahead of the tip along the arc until the task succeeds. The contact point is
-measured on the hand itself (mean fingertip), so the script serves every hand and mount.
+For faucet levers (vertical hinge: the hand hangs its fingers beside the lever tip, pads
+facing the way the tip must go) and lids (horizontal hinge: palm-down fingers, tilted
+down, slide under the free edge). Either way the fingers keep a little ahead of the tip
+along its arc until the task succeeds. The contact point is measured on the hand itself
+(mean fingertip), so the script serves every hand and mount.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import torch
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand
-from dexbench.experts.motion import palm_down, pitch_down, step_towards
+from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 
 SPEED = 0.4  # m/s in the air
 PUSH_SPEED = 0.1  # m/s along the arc
@@ -26,13 +27,19 @@ BESIDE = 0.025  # m the pads start behind the tip, on the side they push from
 
 @dataclass(frozen=True)
 class TurnPlan:
-    """`body`/`tip`: the lever body and its tip point (body frame); `hinge`: the
-    hinge joint (vertical axis), turned towards its upper limit by `direction` +1."""
+    """`body`/`tip`: the turning body and its tip point (body frame); `hinge`: its hinge
+    joint, turned towards its upper limit by `direction` +1. With `pitch` (rad) the hand
+    is palm-down, fingers along `yaw_body`'s x axis tilted down by `pitch`, and comes in
+    from `approach` (a direction in `yaw_body`'s frame); without, it hangs its fingers
+    beside the tip and comes down from above."""
 
     body: str
     tip: tuple[float, float, float]
     hinge: str
     direction: float = 1.0
+    pitch: float | None = None
+    yaw_body: str | None = None
+    approach: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
 
 class TurnExpert:
@@ -46,6 +53,7 @@ class TurnExpert:
         self._palm = model.site(layout.palm_site).id
         self._tips = [model.site(s).id for s in layout.fingertip_sites[1:]]  # no thumb
         self._hinge_body = model.body(model.joint(plan.hinge).bodyid[0]).name
+        self._hinge_axis = tuple(model.joint(plan.hinge).axis)
         n = env.num_envs
         self.pos = np.zeros((n, 3))
         self.rot = np.repeat(np.eye(3)[None], n, axis=0)
@@ -67,17 +75,25 @@ class TurnExpert:
         view = self.env.view
         tip = view.point_pos(self.plan.body, self.plan.tip).numpy()
         pivot = view.body_pos(self._hinge_body).numpy()
+        axis = view.axis(self._hinge_body, self._hinge_axis).numpy()
         radial = tip - pivot
-        radial[:, 2] = 0.0
+        radial -= (radial * axis).sum(axis=1, keepdims=True) * axis
         radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
-        tangent = self.plan.direction * np.cross([0.0, 0.0, 1.0], radial)
-        # Fingers hanging, pads (palm side) facing the push direction.
-        yaw = np.arctan2(-tangent[:, 1], -tangent[:, 0])
-        rot = palm_down(yaw) @ pitch_down(np.pi / 2)
+        tangent = self.plan.direction * np.cross(axis, radial)
+        if self.plan.pitch is None:
+            # Fingers hanging, pads (palm side) facing the push direction.
+            yaw = np.arctan2(-tangent[:, 1], -tangent[:, 0])
+            rot = palm_down(yaw) @ pitch_down(np.pi / 2)
+            approach = np.array([0.0, 0.0, 1.0])
+        else:
+            frame = self.plan.yaw_body or self.plan.body
+            rot = palm_down(body_yaw(view.body_quat(frame).numpy())) @ pitch_down(
+                self.plan.pitch)
+            approach = view.axis(frame, self.plan.approach).numpy()
         beside = tip - BESIDE * tangent
         ahead = tip + LEAD * tangent
         pads_world = np.einsum("nij,nj->ni", rot, self.pads)
-        goal = {0: beside + [0.0, 0.0, HOVER], 1: beside, 2: ahead}
+        goal = {0: beside + HOVER * approach, 1: beside, 2: ahead}
         target = np.stack([goal[int(s)][i] for i, s in enumerate(self.stage)]) - pads_world
         close = np.linalg.norm(self.pos - target, axis=1) < 0.01
         self.stage[(self.stage < 2) & close] += 1
