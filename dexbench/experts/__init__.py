@@ -17,7 +17,11 @@ from dexbench.experts.turn import TurnExpert, TurnPlan
 
 
 def _on_base_cube(env: DexEnv):
-    return env.view.body_pos("base_cube").cpu().numpy() + [0.0, 0.0, 0.052]
+    """Where the carried cube's centre goes: just above resting on the base cube."""
+    return env.view.body_pos("base_cube").cpu().numpy() + [0.0, 0.0, STACK_HEIGHT]
+
+
+STACK_HEIGHT = 0.052  # m: two 2.5 cm half-sizes plus a 2 mm drop
 
 
 def _drawer_pulled(env: DexEnv):
