@@ -38,7 +38,9 @@ def test_adapter_puts_the_palm_where_commanded(embodiment):
 
 @pytest.mark.parametrize(("task", "embodiment"), [
     ("PickCube", "floating_shadow"), ("PushButton", "floating_shadow"),
-    ("TurnOnSwitch", "floating_shadow"), ("BimanualLiftTray", "bimanual_floating_shadow")])
+    ("TurnOnSwitch", "floating_shadow"), ("OpenFaucet", "floating_shadow"),
+    ("OpenDrawer", "floating_shadow"), ("StackCube", "floating_shadow"),
+    ("BimanualLiftTray", "bimanual_floating_shadow")])
 def test_expert_solves_task_on_floating_shadow(task, embodiment):
     env = make_env(task, embodiment, num_envs=4, seed=3)
     env.reset()
