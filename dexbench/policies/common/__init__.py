@@ -1,0 +1,1 @@
+"""Pieces every learned policy shares: the protocol, normalizers, chunking, EMA, checkpoints."""

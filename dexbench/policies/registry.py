@@ -1,0 +1,25 @@
+"""Policy kinds by name, imported lazily so that a missing optional extra stays local.
+
+Each kind's module provides `spec(checkpoint) -> PolicySpec` (read before the env is
+built, so the env gets the right observation preset) and
+`build(checkpoint, env, device) -> Policy`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+KINDS = {
+    "dp": "dexbench.policies.dp.policy",
+    "dp3": "dexbench.policies.dp3.policy",
+    "expert": "dexbench.policies.expert",
+    "rl": "dexbench.policies.rl",
+}
+
+
+def policy_module(kind: str) -> ModuleType:
+    """The module implementing policy `kind`, or an error listing the known kinds."""
+    if kind not in KINDS:
+        raise ValueError(f"unknown policy {kind!r}; choose one of {', '.join(sorted(KINDS))}")
+    return importlib.import_module(KINDS[kind])
