@@ -1,0 +1,304 @@
+"""`python eval.py +split=<name> policy=<kind> checkpoint=<path>`: closed-loop evaluation.
+
+Runs `episodes` evaluation episodes per task (keys in `dexbench/eval/seeds.py`, never a
+demonstration's) on `num_envs` batched envs with batched policy inference, and writes to
+`runs/eval/<split-or-task>/<policy>/<name-or-timestamp>/`: `episodes.jsonl` (one line
+per finished episode, as it ends), `results.{md,csv,tex,json}` (per-task success with
+95% Wilson intervals, category and overall means), `success_by_category.png`, videos of
+`video.episodes` under `videos/<task>/`, `config.yaml`, `run.json` and `eval.log`.
+`resume=<run folder>` (or the same `name=`) continues an interrupted run: finished
+episodes are kept and not run again. `python eval.py task=<Task> policy=expert`
+evaluates one task.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import pathlib
+import sys
+import time
+from collections.abc import Callable
+
+import torch
+import yaml
+from omegaconf import DictConfig, OmegaConf
+from tqdm import tqdm
+
+from dexbench.cli.config import ConfigError, env_kwargs, load_config, runs_root, write_atomic
+from dexbench.envs.dex_env import DexEnv
+from dexbench.eval.merge import RESULTS_FILE
+from dexbench.eval.metrics import summarize
+from dexbench.eval.plan import TaskPlan, plan_task
+from dexbench.eval.plot import category_chart
+from dexbench.eval.records import EpisodeLog, EpisodeRecord
+from dexbench.eval.runner import run_episodes
+from dexbench.eval.tables import write_tables
+from dexbench.eval.video import EpisodeCamera, EpisodeVideos
+from dexbench.policies.common.protocol import Policy, check_action_layout
+from dexbench.policies.registry import policy_module
+from dexbench.tasks.registry import TASKS, make_env
+
+RUNTIME_KEYS = ("num_envs", "device", "progress", "sim.nthread", "skip_missing")
+CHART_FILE = "success_by_category.png"
+
+
+class EvalError(ConfigError):
+    """An evaluation that cannot start or go on as asked."""
+
+
+def eval_config(argv: list[str]) -> tuple[DictConfig, pathlib.Path | None]:
+    """The resolved config, and the run folder when `resume=` names one."""
+    resume = [a.split("=", 1)[1] for a in argv if a.split("=", 1)[0] == "resume"]
+    if not resume:
+        return load_config("eval", argv), None
+    run_dir = pathlib.Path(resume[0])
+    if not (run_dir / "config.yaml").exists():
+        raise EvalError(f"resume={run_dir} is not an evaluation run folder (no config.yaml)")
+    cfg = OmegaConf.create(yaml.safe_load((run_dir / "config.yaml").read_text()))
+    for arg in argv:
+        key, _, value = arg.lstrip("+").partition("=")
+        if key == "resume":
+            continue
+        if key not in RUNTIME_KEYS:
+            raise EvalError(f"resume= continues a run with the config stored in it; only "
+                            f"{', '.join(RUNTIME_KEYS)} may change (got {key}=)")
+        OmegaConf.update(cfg, key, yaml.safe_load(value), force_add=True)
+    return cfg, run_dir
+
+
+def task_groups(cfg: DictConfig) -> tuple[str, dict[str, list[str]]]:
+    """(label, category -> tasks): the split's, or the one task's."""
+    split = cfg.get("split")
+    if split is not None:
+        if not isinstance(split, DictConfig) or "categories" not in split:
+            raise EvalError("split must be chosen with +split=<name> (conf/split/)")
+        return str(split.name), {str(c): [str(t) for t in ts]
+                                 for c, ts in split.categories.items()}
+    task = str(cfg.task)
+    category = TASKS[task].category if task in TASKS else "unknown"
+    return task, {category: [task]}
+
+
+def _identity(cfg: DictConfig, label: str, groups: dict[str, list[str]]) -> dict:
+    """What fixes a run's episodes and outcomes: a resumed run must agree on all of it."""
+    ckpt = cfg.checkpoint
+    return {"label": label, "categories": groups, "policy": policy_kind(cfg),
+            "checkpoint": None if ckpt is None else str(pathlib.Path(ckpt).resolve()),
+            "embodiment": cfg.embodiment, "episodes": int(cfg.episodes),
+            "seed": int(cfg.seed), "horizon": cfg.horizon,
+            "sim": {k: v for k, v in OmegaConf.to_container(cfg.sim).items() if k != "nthread"},
+            **{k: OmegaConf.to_container(cfg[k]) for k in ("camera", "visual", "physical")}}
+
+
+def _check(cfg: DictConfig) -> None:
+    episodes = int(cfg.episodes)
+    if episodes < 1 or (cfg.num_envs is not None and int(cfg.num_envs) < 1):
+        raise EvalError(f"episodes and num_envs must be >= 1, got {episodes} and "
+                        f"{cfg.num_envs}")
+    if cfg.horizon is not None and int(cfg.horizon) < 1:
+        raise EvalError(f"horizon must be >= 1 control steps or null, got {cfg.horizon}")
+    bad = [e for e in cfg.video.episodes if not 0 <= int(e) < episodes]
+    if bad:
+        raise EvalError(f"video.episodes {bad} lie outside the {episodes} episodes [0, "
+                        f"{episodes})")
+
+
+def open_run(cfg: DictConfig, run_dir: pathlib.Path | None) -> pathlib.Path:
+    """Create the run folder, or reopen one whose identity matches this config."""
+    label, groups = task_groups(cfg)
+    identity = _identity(cfg, label, groups)
+    if run_dir is None:
+        name = cfg.name or dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
+        run_dir = runs_root() / "eval" / label / policy_kind(cfg) / str(name)
+    run_file = run_dir / "run.json"
+    if run_file.exists():
+        stored = json.loads(run_file.read_text())["identity"]
+        changed = sorted(k for k in {*stored, *identity} if stored.get(k) != identity.get(k))
+        if changed:
+            raise EvalError(f"{run_dir} holds a run with other settings ({', '.join(changed)}"
+                            "); choose another name= or resume= it unchanged")
+    else:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        write_atomic(run_dir / "config.yaml", yaml.safe_dump(OmegaConf.to_container(cfg)))
+        write_atomic(run_file, json.dumps({"identity": identity}, indent=2) + "\n")
+    with open(run_dir / "command.txt", "a") as f:
+        f.write(" ".join(sys.argv) + "\n")
+    return run_dir
+
+
+def policy_kind(cfg: DictConfig) -> str:
+    """The policy kind: `policy=<kind>` selects conf/policy/<kind>.yaml, named by `name`."""
+    return str(cfg.policy.name if isinstance(cfg.policy, DictConfig) else cfg.policy)
+
+
+def _device(name: str) -> str:
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    return name
+
+
+def plan_tasks(cfg: DictConfig) -> tuple[list[TaskPlan], dict[str, str]]:
+    """Every task's plan, or an error naming the tasks that cannot run (unless
+    `+skip_missing=true`, which returns them as skipped with their reasons)."""
+    label, groups = task_groups(cfg)
+    module = policy_module(policy_kind(cfg))
+    plans, problems = [], {}
+    for category, tasks in groups.items():
+        for task in tasks:
+            plan = plan_task(task, category, module, cfg.checkpoint, cfg.embodiment)
+            if isinstance(plan, TaskPlan):
+                plans.append(plan)
+            else:
+                problems[task] = plan
+    if problems and not cfg.get("skip_missing", False):
+        by_reason: dict[str, list[str]] = {}
+        for task, why in problems.items():
+            by_reason.setdefault(why, []).append(task)
+        listed = "; ".join(f"{', '.join(ts)}: {why}" for why, ts in by_reason.items())
+        total = sum(map(len, groups.values()))
+        raise EvalError(f"{len(problems)} of the {total} tasks of {label} cannot be "
+                        f"evaluated ({listed}); add +skip_missing=true to evaluate the "
+                        f"other {total - len(problems)}")
+    return plans, problems
+
+
+def build_env(cfg: DictConfig, plan: TaskPlan, num_envs: int) -> DexEnv:
+    """A batched env for `plan` with the policy's observation preset."""
+    kwargs = env_kwargs(OmegaConf.merge(cfg, {"num_envs": num_envs}))
+    obs = plan.spec.obs if isinstance(plan.spec.obs, str) else list(plan.spec.obs)
+    kwargs.update(task=plan.task, embodiment=plan.embodiment, obs=obs)
+    env = make_env(**kwargs)
+    if cfg.horizon is not None:
+        env.episode_steps = int(cfg.horizon)
+    return env
+
+
+def build_policy(cfg: DictConfig, plan: TaskPlan, env: DexEnv) -> Policy:
+    policy = policy_module(policy_kind(cfg)).build(plan.checkpoint, env, _device(cfg.device))
+    check_action_layout(policy.spec, env.embodiment.actuators)
+    return policy
+
+
+def _log(run_dir: pathlib.Path, line: str) -> None:
+    with open(run_dir / "eval.log", "a") as f:
+        f.write(f"{dt.datetime.now().isoformat(timespec='seconds')} {line}\n")
+
+
+def write_results(cfg: DictConfig, run_dir: pathlib.Path, plans: list[TaskPlan],
+                  skipped: dict[str, str], records: list[EpisodeRecord]) -> dict:
+    """results.{md,csv,tex,json} and the chart from the episodes finished so far."""
+    label, groups = task_groups(cfg)
+    planned = {p.task for p in plans}
+    counts = {p.task: 0 for p in plans if p.task not in skipped}
+    for r in records:
+        if r.task in planned:
+            counts[r.task] += 1
+    kind = policy_kind(cfg)
+    info = {"label": label, "policy": kind, "policy_label": cfg.label or kind,
+            "checkpoint": cfg.checkpoint, "episodes_per_task": int(cfg.episodes),
+            "seed": int(cfg.seed), "horizon": cfg.horizon, "run_dir": str(run_dir),
+            "complete": all(c >= int(cfg.episodes) for c in counts.values())}
+    summary = summarize(groups, [r for r in records if r.task in planned], skipped, info)
+    write_tables(summary, run_dir)
+    if summary["categories"]:
+        category_chart(summary, run_dir / CHART_FILE)
+    return summary
+
+
+def prepare(cfg: DictConfig, resume: pathlib.Path | None = None
+            ) -> tuple[list[TaskPlan], dict[str, str], pathlib.Path]:
+    """Check the config and every task, then create or reopen the run folder."""
+    _check(cfg)
+    plans, skipped = plan_tasks(cfg)
+    return plans, skipped, open_run(cfg, resume)
+
+
+def evaluate(cfg: DictConfig, plans: list[TaskPlan], skipped: dict[str, str],
+             run_dir: pathlib.Path,
+             on_episode: Callable[[EpisodeRecord], None] | None = None) -> dict:
+    """Evaluate every planned task, resuming from `run_dir`'s episodes; the summary.
+
+    `on_episode` sees each record once it is on disk.
+    """
+    log = EpisodeLog(run_dir / "episodes.jsonl")
+    records = log.load()
+    episodes = int(cfg.episodes)
+    done = {(r.task, r.episode) for r in records}
+    todo = {p.task: [i for i in range(episodes) if (p.task, i) not in done] for p in plans}
+    bar = tqdm(total=episodes * len(plans), initial=episodes * len(plans) - sum(
+        map(len, todo.values())), unit="episode", disable=not cfg.progress)
+
+    def record(rec: EpisodeRecord) -> None:
+        log.append(rec)
+        records.append(rec)
+        bar.update(1)
+        if on_episode is not None:
+            on_episode(rec)
+
+    try:
+        for plan in plans:
+            if todo[plan.task]:
+                _evaluate_task(cfg, run_dir, plan, todo[plan.task], skipped, record, bar)
+                write_results(cfg, run_dir, plans, skipped, records)
+    except KeyboardInterrupt:
+        write_results(cfg, run_dir, plans, skipped, records)
+        raise
+    finally:
+        bar.close()
+    return write_results(cfg, run_dir, plans, skipped, records)
+
+
+def _evaluate_task(cfg: DictConfig, run_dir: pathlib.Path, plan: TaskPlan, pending: list[int],
+                   skipped: dict[str, str], record: Callable[[EpisodeRecord], None],
+                   bar: tqdm) -> None:
+    width = int(cfg.num_envs) if cfg.num_envs is not None else min(50, int(cfg.episodes))
+    env = build_env(cfg, plan, min(width, len(pending)))
+    try:
+        policy = build_policy(cfg, plan, env)
+    except ValueError as err:
+        if not cfg.get("skip_missing", False):
+            raise EvalError(f"{plan.task}: {err} (+skip_missing=true evaluates the other "
+                            "tasks)") from None
+        skipped[plan.task] = f"policy cannot run: {err}"
+        _log(run_dir, f"{plan.task}: skipped: {err}")
+        return
+    videos = None
+    if cfg.video.episodes:
+        camera = EpisodeCamera(env, str(cfg.video.camera), int(cfg.video.width),
+                               int(cfg.video.height))
+        videos = EpisodeVideos(camera, {int(e) for e in cfg.video.episodes},
+                               run_dir / "videos" / plan.task, 1.0 / env.control_dt)
+    bar.set_description(plan.task)
+    _log(run_dir, f"{plan.task}: {len(pending)} episodes on {env.num_envs} envs "
+                  f"({plan.embodiment}, obs {plan.spec.obs})")
+    started, successes = time.perf_counter(), 0
+
+    def counted(rec: EpisodeRecord) -> None:
+        nonlocal successes
+        successes += rec.success
+        record(rec)
+
+    try:
+        run_episodes(env, policy, pending, int(cfg.seed), counted, videos)
+    finally:
+        if videos is not None:
+            videos.close()
+    _log(run_dir, f"{plan.task}: {successes}/{len(pending)} successes in "
+                  f"{time.perf_counter() - started:.1f} s")
+
+
+def main(argv: list[str]) -> int:
+    cfg, resume = eval_config(argv)
+    plans, skipped, run_dir = prepare(cfg, resume)
+    try:
+        summary = evaluate(cfg, plans, skipped, run_dir)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: finished episodes are kept in {run_dir}/episodes.jsonl; "
+              f"continue with `python eval.py resume={run_dir}`", file=sys.stderr)
+        return 130
+    print((run_dir / "results.md").read_text())
+    print(json.dumps({"overall": summary["overall"], "episodes": summary["episodes"],
+                      "complete": summary["complete"], "run_dir": str(run_dir),
+                      "results": str(run_dir / RESULTS_FILE)}))
+    return 0 if summary["complete"] else 1

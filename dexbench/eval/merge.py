@@ -1,0 +1,142 @@
+"""The paper-style table from several evaluation runs: tasks x policies, grouped by
+category with a mean row per category and overall, the best value of each row in bold."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import pathlib
+from dataclasses import dataclass
+
+from dexbench.eval.tables import tex_escape, write_text
+
+RESULTS_FILE = "results.json"
+
+
+class MergeError(ValueError):
+    """Runs that cannot be merged (missing results, nothing in common)."""
+
+
+@dataclass(frozen=True)
+class MergedTable:
+    policies: list[str]
+    categories: list[tuple[str, list[str]]]  # category -> tasks, in first-seen order
+    cells: dict[str, dict[str, float | None]]  # task -> policy -> success rate
+    means: dict[str, dict[str, float | None]]  # category (and "all") -> policy -> mean
+
+
+def load_results(run_dir: pathlib.Path) -> dict:
+    path = run_dir / RESULTS_FILE
+    if not path.exists():
+        raise MergeError(f"{run_dir} has no {RESULTS_FILE}: pass evaluation run folders "
+                         "(runs/eval/<split>/<policy>/<run>)")
+    return json.loads(path.read_text())
+
+
+def _labels(summaries: list[dict], run_dirs: list[pathlib.Path]) -> list[str]:
+    labels = [s["policy_label"] for s in summaries]
+    return [f"{label} ({d.name})" if labels.count(label) > 1 else label
+            for label, d in zip(labels, run_dirs, strict=True)]
+
+
+def _mean(values: list[float | None]) -> float | None:
+    present = [v for v in values if v is not None]
+    return sum(present) / len(present) if present else None
+
+
+def merge_runs(run_dirs: list[pathlib.Path]) -> MergedTable:
+    """One table over every task any run evaluated; a policy's means cover the tasks
+    it evaluated (a missing cell shows as '-')."""
+    if not run_dirs:
+        raise MergeError("name at least one evaluation run folder to merge")
+    summaries = [load_results(d) for d in run_dirs]
+    policies = _labels(summaries, run_dirs)
+    order: dict[str, list[str]] = {}
+    cells: dict[str, dict[str, float | None]] = {}
+    for policy, summary in zip(policies, summaries, strict=True):
+        for t in summary["tasks"]:
+            if t["task"] not in cells:
+                order.setdefault(t["category"], []).append(t["task"])
+                cells[t["task"]] = dict.fromkeys(policies)
+            cells[t["task"]][policy] = t["success_rate"]
+    if not cells:
+        raise MergeError("none of the runs has a finished task to tabulate")
+    means = {cat: {p: _mean([cells[t][p] for t in tasks]) for p in policies}
+             for cat, tasks in order.items()}
+    means["all"] = {p: _mean([row[p] for row in cells.values()]) for p in policies}
+    return MergedTable(policies, list(order.items()), cells, means)
+
+
+def _best(row: dict[str, float | None]) -> set[str]:
+    """Policies holding the row's best value, unless every policy ties."""
+    values = [v for v in row.values() if v is not None]
+    if len(set(values)) < 2:
+        return set()
+    top = max(values)
+    return {p for p, v in row.items() if v == top}
+
+
+def _cells(row: dict[str, float | None], bold: str) -> list[str]:
+    best = _best(row)
+    return [("-" if v is None else bold.format(f"{v:.2f}") if p in best else f"{v:.2f}")
+            for p, v in row.items()]
+
+
+def markdown(table: MergedTable) -> str:
+    lines = ["| category | task | " + " | ".join(table.policies) + " |",
+             "|---|---|" + "---:|" * len(table.policies)]
+    for cat, tasks in table.categories:
+        for t in tasks:
+            lines.append(f"| {cat} | {t} | " + " | ".join(_cells(table.cells[t], "**{}**"))
+                         + " |")
+        lines.append(f"| *{cat}* | *mean* | "
+                     + " | ".join(_cells(table.means[cat], "**{}**")) + " |")
+    lines.append("| **all** | **mean** | " + " | ".join(_cells(table.means["all"], "**{}**"))
+                 + " |")
+    return "\n".join(lines) + "\n"
+
+
+def latex(table: MergedTable) -> str:
+    """Needs `\\usepackage{booktabs,multirow}`."""
+    cols = "ll" + "c" * len(table.policies)
+    lines = [rf"\begin{{tabular}}{{{cols}}}", r"\toprule",
+             "Category & Task & " + " & ".join(map(tex_escape, table.policies)) + r" \\",
+             r"\midrule"]
+    bold = r"\textbf{{{}}}"
+    for cat, tasks in table.categories:
+        for i, t in enumerate(tasks):
+            head = rf"\multirow{{{len(tasks)}}}{{*}}{{{tex_escape(cat)}}}" if i == 0 else ""
+            lines.append(f"{head} & {tex_escape(t)} & "
+                         + " & ".join(_cells(table.cells[t], bold)) + r" \\")
+        lines += [r"\cmidrule{2-" + str(2 + len(table.policies)) + "}",
+                  " & Mean & " + " & ".join(_cells(table.means[cat], bold)) + r" \\",
+                  r"\midrule"]
+    lines += [r"\multicolumn{2}{l}{Mean} & " + " & ".join(_cells(table.means["all"], bold))
+              + r" \\", r"\bottomrule", r"\end{tabular}"]
+    return "\n".join(lines) + "\n"
+
+
+def csv_text(table: MergedTable) -> str:
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["category", "task", *table.policies])
+
+    def fmt(row: dict[str, float | None]) -> list[str]:
+        return ["" if v is None else f"{v:.4f}" for v in row.values()]
+
+    for cat, tasks in table.categories:
+        writer.writerows([cat, t, *fmt(table.cells[t])] for t in tasks)
+        writer.writerow([cat, "mean", *fmt(table.means[cat])])
+    writer.writerow(["all", "mean", *fmt(table.means["all"])])
+    return out.getvalue()
+
+
+def write_merged(table: MergedTable, out_dir: pathlib.Path) -> dict[str, pathlib.Path]:
+    """merged.{md,tex,csv} in `out_dir`; the paths by format."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {}
+    for fmt, text in (("md", markdown(table)), ("tex", latex(table)), ("csv", csv_text(table))):
+        paths[fmt] = out_dir / f"merged.{fmt}"
+        write_text(paths[fmt], text)
+    return paths

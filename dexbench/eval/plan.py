@@ -1,0 +1,59 @@
+"""Which tasks an evaluation runs, on which embodiment, with which checkpoint, and why a
+task cannot run (not implemented yet, wrong number of hands, no checkpoint for it).
+
+Everything here is checked before the first episode, so a long split run does not fail
+half way for a reason known at the start.
+"""
+
+from __future__ import annotations
+
+import pathlib
+from dataclasses import dataclass
+from types import ModuleType
+
+from dexbench.embodiments.builder import parse_embodiment
+from dexbench.policies.common.protocol import PolicySpec
+from dexbench.tasks.registry import TASKS
+
+
+@dataclass(frozen=True)
+class TaskPlan:
+    task: str
+    category: str
+    embodiment: str
+    checkpoint: str | None
+    spec: PolicySpec
+
+
+def checkpoint_for(checkpoint: str | None, task: str) -> str | None:
+    """A folder holding one entry per task (`<folder>/<task>`) gives each task its own
+    checkpoint; anything else is passed to the policy kind as it is."""
+    if checkpoint is None:
+        return None
+    per_task = pathlib.Path(checkpoint) / task
+    return str(per_task) if per_task.exists() else checkpoint
+
+
+def _arity(name: str) -> str:
+    return "two hands" if parse_embodiment(name).bimanual else "one hand"
+
+
+def plan_task(task: str, category: str, module: ModuleType, checkpoint: str | None,
+              embodiment: str | None) -> TaskPlan | str:
+    """The plan for `task`, or the reason it cannot be evaluated."""
+    if task not in TASKS:
+        return "not implemented yet (`python -m dexbench list tasks` lists those that are)"
+    ckpt = checkpoint_for(checkpoint, task)
+    try:
+        spec = module.spec(ckpt)
+    except (ValueError, OSError) as err:
+        return f"policy cannot be loaded: {err}"
+    if spec.task is not None and spec.task != task:
+        return (f"the checkpoint was trained on {spec.task}; give a folder with one "
+                "checkpoint per task (<folder>/<task>)")
+    cls = TASKS[task]
+    name = embodiment or spec.embodiment or cls.default_embodiment
+    if parse_embodiment(name).bimanual != parse_embodiment(cls.default_embodiment).bimanual:
+        return (f"the task needs {_arity(cls.default_embodiment)}; embodiment {name} has "
+                f"{_arity(name)}")
+    return TaskPlan(task, category, name, ckpt, spec)

@@ -1,0 +1,44 @@
+"""Bar chart of success by category: one bar per category mean, its tasks as dots with
+their 95% Wilson intervals, the overall mean as a dashed line."""
+
+from __future__ import annotations
+
+import pathlib
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only: no display on servers
+
+import matplotlib.pyplot as plt
+
+
+def category_chart(summary: dict, path: pathlib.Path) -> None:
+    """Write the chart as PNG (temp file, then rename)."""
+    cats = summary["categories"]
+    fig, ax = plt.subplots(figsize=(max(4.0, 1.2 * len(cats) + 1.5), 3.6), dpi=150)
+    xs = range(len(cats))
+    ax.bar(xs, [c["mean"] for c in cats], color="#8fb3d9", edgecolor="#2f5d8a", width=0.6,
+           label="category mean")
+    by_task = {t["task"]: t for t in summary["tasks"]}
+    for x, cat in zip(xs, cats, strict=True):
+        tasks = [by_task[t] for t in cat["tasks"]]
+        offsets = [0.0] if len(tasks) == 1 else [
+            -0.2 + 0.4 * i / (len(tasks) - 1) for i in range(len(tasks))]
+        for dx, t in zip(offsets, tasks, strict=True):
+            rate = t["success_rate"]
+            ax.errorbar(x + dx, rate, yerr=[[rate - t["ci_low"]], [t["ci_high"] - rate]],
+                        fmt="o", color="#1b1b1b", markersize=3, capsize=2, linewidth=0.8)
+    if summary["overall"] is not None:
+        ax.axhline(summary["overall"], color="#c0392b", linestyle="--", linewidth=1,
+                   label=f"overall {summary['overall']:.2f}")
+    ax.set_xticks(list(xs), [c["category"] for c in cats], rotation=30, ha="right")
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("success rate")
+    ax.set_title(f"{summary['policy_label']} on {summary['label']} "
+                 f"({summary['episodes_per_task']} episodes/task, 95% Wilson CI)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.name}.tmp")
+    fig.savefig(tmp, format="png")
+    plt.close(fig)
+    tmp.replace(path)
