@@ -126,7 +126,7 @@ class DexEnv:
         self._history: Obs = {}
         self._was_reset = False
         for body in task.tracked_bodies:
-            self.view.initial_body_pos[body] = torch.zeros(num_envs, 3, dtype=torch.float64,
+            self.view.initial_body_pos[body] = torch.zeros(num_envs, 3, dtype=fields["xpos"].dtype,
                                                            device=self.device)
 
     @property

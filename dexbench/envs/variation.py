@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+import torch
 
 from dexbench.assets.backgrounds import DEFAULT as BACKDROP_DEFAULT
 from dexbench.assets.backgrounds import background_pool, list_images
@@ -114,6 +115,7 @@ class Variation:
         library = [n for n in library if n.startswith("bg/") and n != BACKDROP_DEFAULT]
         self._backgrounds = [m.material(n).id for n in background_pool(library, visual.split)]
         self._materials = [material_ids[i] for i in pool(visual.split)]
+        self._staged: dict[str, tuple] = {}  # field -> (backend values, host values)
 
     def apply(self, env_ids: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Sample and write variation for the given environments."""
@@ -121,9 +123,26 @@ class Variation:
             self._apply_visual(env_ids, rngs)
         if self.physical.enabled:
             self._apply_physical(env_ids, rngs)
+            self._flush(env_ids)
+            self._sim.set_const(env_ids)
+        self._flush(env_ids)
 
     def _field(self, name: str) -> np.ndarray:
-        return self._sim.model_field(name).numpy()
+        """Per-world values of a model field to write: a view of the backend's own
+        array on the CPU, a host copy of a GPU one (written back by `_flush`)."""
+        if name not in self._staged:
+            values = self._sim.model_field(name)
+            host = values.numpy() if values.device.type == "cpu" else values.cpu().numpy()
+            self._staged[name] = (values, host)
+        return self._staged[name][1]
+
+    def _flush(self, env_ids: np.ndarray) -> None:
+        """Copy the staged rows of those environments onto the device."""
+        for values, host in self._staged.values():
+            if values.device.type != "cpu":
+                rows = torch.as_tensor(env_ids, device=values.device)
+                values[rows] = torch.as_tensor(host[env_ids], device=values.device)
+        self._staged = {}
 
     def _apply_visual(self, env_ids: np.ndarray, rngs: list[np.random.Generator]) -> None:
         v, m = self.visual, self._base
@@ -181,4 +200,3 @@ class Variation:
                 s = rng.uniform(*p.robot_gain)
                 gain[env, a, 0] = m.actuator_gainprm[a, 0] * s
                 bias[env, a, 1] = m.actuator_biasprm[a, 1] * s
-        self._sim.set_const(env_ids)

@@ -9,25 +9,33 @@ from dexbench.sim.cpu import CpuBackend
 from dexbench.sim.render import CpuRenderer
 from dexbench.sim.warp_render import WarpRenderer
 
-BACKENDS = ("cpu",)
+BACKENDS = ("cpu", "warp")
 RENDERERS = ("cpu", "warp")
 
 
-def make_backend(name: str, model: mujoco.MjModel, num_envs: int, nthread: int = 0) -> SimBackend:
-    """A backend holding `num_envs` worlds of `model`."""
+def make_backend(name: str, model: mujoco.MjModel, num_envs: int, nthread: int = 0,
+                 nconmax: int | None = None, njmax: int | None = None) -> SimBackend:
+    """A backend holding `num_envs` worlds of `model`: `cpu` (mujoco.batch on `nthread`
+    threads) or `warp` (mujoco_warp on the GPU, warp's CPU device without one;
+    `nconmax`/`njmax` override its per-world contact and constraint capacity)."""
     if name == "cpu":
         return CpuBackend(model, num_envs, nthread)
+    if name == "warp":
+        from dexbench.sim.warp import WarpBackend  # imports warp only when asked for
+
+        return WarpBackend(model, num_envs, nconmax=nconmax, njmax=njmax)
     raise ValueError(f"unknown sim backend {name!r}; available: {', '.join(BACKENDS)}")
 
 
 def make_renderer(backend: SimBackend, width: int, height: int,
                   kind: str = "cpu") -> CpuRenderer | WarpRenderer:
-    """A renderer for a backend: `cpu` (OpenGL, `mujoco.Renderer`) or `warp` (ray traced,
-    on CUDA when there is a GPU)."""
+    """A renderer for a backend: `cpu` (OpenGL, `mujoco.Renderer`; CPU backend only) or
+    `warp` (ray traced, on CUDA when there is a GPU; the warp backend's own arrays)."""
     if kind not in RENDERERS:
         raise ValueError(f"unknown renderer {kind!r}; available: {', '.join(RENDERERS)}")
-    if not isinstance(backend, CpuBackend):
-        raise ValueError(f"no renderer for backend {type(backend).__name__}")
     if kind == "warp":
         return WarpRenderer(backend, width, height)
+    if not isinstance(backend, CpuBackend):
+        raise ValueError(f"the cpu renderer needs the cpu backend; with "
+                         f"{type(backend).__name__} use camera.renderer=warp")
     return CpuRenderer(backend, width, height)

@@ -7,7 +7,8 @@ kinematics every world already computed (geom, camera and light frames) are copi
 the warp device, so no warp physics is compiled; per-world appearance (materials,
 colours, light colour, field of view) follows the backend's per-world model fields.
 Runs on CUDA, or on warp's CPU device where there is no GPU (slow, but the same code:
-the tests use it).
+the tests use it). With the warp backend it renders the simulator's own arrays: nothing
+is copied and appearance follows its per-world model fields directly.
 """
 
 from __future__ import annotations
@@ -44,23 +45,30 @@ def default_warp_device() -> str:
 
 
 class WarpRenderer:
-    """Renders named cameras of every world of a `CpuBackend` with mujoco_warp."""
+    """Renders named cameras of every world of a `CpuBackend` or a `WarpBackend` with
+    mujoco_warp."""
 
-    def __init__(self, backend: CpuBackend, width: int, height: int,
-                 device: str | None = None) -> None:
+    def __init__(self, backend, width: int, height: int, device: str | None = None) -> None:
         self._wp, self._mjw = _import_warp()
         self._backend = backend
         self._model = backend.model
         self.width, self.height = width, height
-        self.device = device or default_warp_device()
         # Images go where the simulator's tensors live, so observations share a device.
         self.output_device = backend.device
         self._far = float(self._model.vis.map.zfar * self._model.stat.extent)
+        self._contexts: dict[tuple, object] = {}
+        self._shared = not isinstance(backend, CpuBackend)
+        if self._shared:  # a WarpBackend: its model and data, current after every step
+            self.device = backend.wp_device
+            self._m, self._d = backend.m, backend.d
+            self._poses = {name: self._wp.to_torch(getattr(self._d, name))
+                           for name in ("cam_xpos", "cam_xmat")}
+            return
+        self.device = device or default_warp_device()
         self._poses = {name: backend.batch.bind(name) for name in _POSE_FIELDS}
         with self._wp.ScopedDevice(self.device):
             self._m = self._mjw.put_model(self._model)
             self._d = self._mjw.make_data(self._model, nworld=backend.num_envs)
-        self._contexts: dict[tuple, object] = {}
 
     def _context(self, cameras: tuple[str, ...], rgb: bool, depth: bool):
         """One render context per camera set and output kind, built on first use."""
@@ -82,6 +90,8 @@ class WarpRenderer:
     def _upload(self) -> None:
         """Copy this step's frames (and per-world appearance) onto the warp device."""
         wp = self._wp
+        if self._shared:
+            return
         for name, value in self._poses.items():
             dst = getattr(self._d, name)
             src = np.ascontiguousarray(value, dtype=np.float32)
@@ -100,13 +110,15 @@ class WarpRenderer:
             self._upload()
             mjw.refit_bvh(self._m, self._d, rc)
             mjw.render(self._m, self._d, rc)
+            if self._shared and self.device != "cpu":  # torch reads the images next
+                torch_stream = wp.stream_from_torch(torch.cuda.current_stream(self.device))
+                torch_stream.wait_stream(wp.get_stream())
         n, h, w = self._backend.num_envs, self.height, self.width
         rgb_all = wp.to_torch(rc.rgb_data).view(torch.uint8) if rgb else None
         depth_all = wp.to_torch(rc.depth_data) if depth else None
         rgb_adr, depth_adr = rc.rgb_adr.numpy(), rc.depth_adr.numpy()
         ids = [self._model.camera(c).id for c in cameras]
-        fovy = self._backend.batch.expand("cam_fovy") if self._backend.per_world_model \
-            else np.broadcast_to(self._model.cam_fovy, (n, self._model.ncam))
+        fovy = self._fovy(n)
         out = {}
         for k, (cam, cid) in enumerate(zip(cameras, ids, strict=True)):
             image = depth_map = None
@@ -118,12 +130,22 @@ class WarpRenderer:
                 start = int(depth_adr[k])
                 raw = depth_all[:, start:start + h * w].reshape(n, h, w)
                 depth_map = torch.where(raw > 0, raw, self._far).to(self.output_device)
+            pos, mat = self._poses["cam_xpos"][:, cid], self._poses["cam_xmat"][:, cid]
             out[cam] = CameraFrames(
-                image, depth_map,
-                torch.from_numpy(np.array(self._poses["cam_xpos"][:, cid])),
-                torch.from_numpy(np.array(self._poses["cam_xmat"][:, cid]).reshape(n, 3, 3)),
-                torch.from_numpy(np.array(fovy[:, cid], dtype=np.float64)))
+                image, depth_map, torch.as_tensor(np.array(pos) if not self._shared
+                                                  else pos.double()),
+                torch.as_tensor(np.array(mat) if not self._shared
+                                else mat.double()).reshape(n, 3, 3),
+                torch.as_tensor(fovy[:, cid]).double())
         return out
+
+    def _fovy(self, n: int):
+        """(n, ncam) field of view of every world's cameras, degrees."""
+        if self._shared:
+            return self._wp.to_torch(self._m.cam_fovy).expand(n, -1)
+        if self._backend.per_world_model:
+            return np.array(self._backend.batch.expand("cam_fovy"))
+        return np.broadcast_to(self._model.cam_fovy, (n, self._model.ncam)).copy()
 
     def close(self) -> None:
         self._contexts.clear()
