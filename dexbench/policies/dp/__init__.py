@@ -1,0 +1,1 @@
+"""Diffusion Policy on low-dimensional state observations."""

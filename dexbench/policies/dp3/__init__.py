@@ -1,0 +1,1 @@
+"""3D Diffusion Policy (DP3) on point clouds and proprioception."""

@@ -1,0 +1,22 @@
+"""The `dp3` policy kind: checkpoints of `python train.py policy=dp3`, run on a batched env."""
+
+from __future__ import annotations
+
+import pathlib
+
+from dexbench.policies.common.kinds import build_policy, checkpoint_spec
+from dexbench.policies.common.protocol import PolicySpec
+from dexbench.policies.common.runner import DiffusionChunkPolicy
+from dexbench.policies.dp3.model import make_model
+
+KIND = "dp3"
+
+
+def spec(checkpoint: str | pathlib.Path) -> PolicySpec:
+    """Task, embodiment, observation preset and action layout of a checkpoint."""
+    return checkpoint_spec(KIND, checkpoint)
+
+
+def build(checkpoint: str | pathlib.Path, env, device: str | None = "auto") -> DiffusionChunkPolicy:
+    """The checkpoint's EMA policy for `env`; refuses an env of another action layout."""
+    return build_policy(KIND, make_model, checkpoint, env, device)
