@@ -1,0 +1,122 @@
+"""`python rl.py task=<T> embodiment=<E> num_envs=4096`: RSL-RL PPO on a batched env.
+
+Trains on the task's dense reward (plus the grasp and action terms of
+`dexbench.rl.rewards`) with the state observation groups for the actor and those plus
+`privileged` for the critic, on `sim.backend` (warp on a GPU; cpu for smoke tests:
+`sim.backend=cpu num_envs=4 rl.max_iterations=2`). Stops after `rl.max_iterations` or
+`rl.max_minutes`, whichever comes first. Writes `runs/rl/<timestamp>-<task>-<emb>/`:
+config, RSL-RL checkpoints (`model_<it>.pt`) and TensorBoard logs, `policy.json` (what
+`python eval.py policy=rl checkpoint=<folder>` needs), `curve.jsonl` and `curve.png`
+(success of finished training episodes vs wall time) and `metrics.json`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import pathlib
+import time
+
+import torch
+from omegaconf import DictConfig, OmegaConf
+from rsl_rl.runners import OnPolicyRunner
+from tqdm import tqdm
+
+from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, write_atomic
+from dexbench.envs.dex_env import DexEnv
+from dexbench.policies.rl import META_FILE
+from dexbench.rl.config import runner_config
+from dexbench.rl.curve import plot_curve
+from dexbench.rl.rewards import RewardWeights
+from dexbench.rl.vec_env import ACTOR_GROUPS, CRITIC_EXTRA, RslVecEnv
+from dexbench.tasks.registry import make_env
+
+
+def _device(cfg: DictConfig, env: DexEnv) -> str:
+    name = str(cfg.rl.device)
+    return str(env.device) if name == "auto" else name
+
+
+def build_env(cfg: DictConfig) -> DexEnv:
+    """The training env: every state group and `privileged`, resets done by the wrapper."""
+    if cfg.obs != "state":
+        raise ConfigError(f"rl.py trains on state observations; got obs={cfg.obs}")
+    kwargs = env_kwargs(cfg)
+    kwargs.update(obs=[*ACTOR_GROUPS, *CRITIC_EXTRA], auto_reset=False)
+    return make_env(**kwargs)
+
+
+def _meta(cfg: DictConfig, env: DexEnv, vec: RslVecEnv) -> dict:
+    obs = vec.get_observations()
+    return {"task": env.task.name, "embodiment": env.embodiment.name,
+            "actuators": list(env.embodiment.actuators),
+            "actor_groups": list(vec.actor_groups), "critic_groups": list(vec.critic_groups),
+            "actor_dim": int(obs["actor"].shape[1]), "critic_dim": int(obs["critic"].shape[1]),
+            "action_scale": float(cfg.rl.action_scale),
+            "network": OmegaConf.to_container(cfg.rl.network, resolve=True),
+            "control_dt": env.control_dt, "sim_backend": str(cfg.sim.backend)}
+
+
+def train(overrides: list[str]) -> dict:
+    cfg = load_config("rl", overrides)
+    rl = cfg.rl
+    if int(rl.max_iterations) < 1 or float(rl.max_minutes) <= 0:
+        raise ConfigError("rl.max_iterations must be >= 1 and rl.max_minutes > 0")
+    torch.manual_seed(int(cfg.seed))
+    env = build_env(cfg)
+    run_dir = new_run_dir("rl", f"{env.task.name}-{env.embodiment.name}", cfg)
+    vec = RslVecEnv(env, float(rl.action_scale), RewardWeights(**rl.rewards),
+                    int(rl.num_steps_per_env), cfg=OmegaConf.to_container(cfg, resolve=True))
+    write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")
+    # RSL-RL's per-iteration console report goes to a file; the console shows a bar.
+    runner_log = open(run_dir / "rsl_rl.log", "w")  # noqa: SIM115  (closed below)
+    with contextlib.redirect_stdout(runner_log):
+        runner = OnPolicyRunner(vec, runner_config(rl), log_dir=str(run_dir),
+                                device=_device(cfg, env))
+    start = time.perf_counter()
+    budget_s = 60.0 * float(rl.max_minutes)
+    total, done = int(rl.max_iterations), 0
+    bar = tqdm(total=total, desc=f"PPO {env.task.name} x{env.num_envs}", unit="it")
+    curve_file = run_dir / "curve.jsonl"
+    while done < total and time.perf_counter() - start < budget_s:
+        chunk = min(int(rl.chunk), total - done)
+        with contextlib.redirect_stdout(runner_log):
+            runner.learn(chunk, init_at_random_ep_len=bool(rl.init_at_random_ep_len)
+                         and done == 0)
+        # learn() stops at its last iteration's number; the next chunk continues after it
+        runner.current_learning_iteration += 1
+        new = vec.curve.points[done:]
+        with open(curve_file, "a") as f:
+            f.writelines(json.dumps(p) + "\n" for p in new)
+        done += chunk
+        bar.update(chunk)
+        last = [p["success_rate"] for p in new if p["success_rate"] is not None]
+        bar.set_postfix(success=f"{last[-1]:.2f}" if last else "-",
+                        reward=f"{new[-1]['mean_reward']:.3f}" if new else "-")
+    bar.close()
+    runner_log.close()
+    plot_curve(vec.curve.points, run_dir / "curve.png",
+               f"PPO {env.task.name} ({env.embodiment.name}, {env.num_envs} envs, "
+               f"{cfg.sim.backend})")
+    finished = [p for p in vec.curve.points if p["success_rate"] is not None]
+    result = {"task": env.task.name, "embodiment": env.embodiment.name,
+              "num_envs": env.num_envs, "backend": str(cfg.sim.backend),
+              "iterations": done, "env_steps": done * int(rl.num_steps_per_env) * env.num_envs,
+              "wall_s": round(time.perf_counter() - start, 1),
+              "final_success_rate": finished[-1]["success_rate"] if finished else None,
+              "checkpoint": str(_latest_model(run_dir)), "run_dir": str(run_dir)}
+    write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
+    return result
+
+
+def _latest_model(run_dir: pathlib.Path) -> pathlib.Path:
+    return max(run_dir.glob("model_*.pt"), key=lambda p: p.stat().st_mtime)
+
+
+def main(argv: list[str]) -> int:
+    result = train(argv)
+    print(f"trained {result['iterations']} iterations in {result['wall_s']} s; "
+          f"evaluate: python eval.py task={result['task']} embodiment={result['embodiment']} "
+          f"policy=rl checkpoint={result['run_dir']}")
+    print(json.dumps(result))
+    return 0

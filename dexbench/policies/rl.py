@@ -1,0 +1,98 @@
+"""`policy=rl`: a PPO actor trained by `python rl.py`, run deterministically (its mean).
+
+The checkpoint is a training run folder (its newest `model_<it>.pt`) or one
+`model_<it>.pt` in such a folder; `policy.json` beside it names the task, embodiment,
+action layout, the observation groups the actor reads and the delta-action scale.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import re
+
+import torch
+from rsl_rl.models import MLPModel
+from tensordict import TensorDict
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.policies.common.protocol import PolicySpec
+from dexbench.rl.vec_env import delta_targets
+
+META_FILE = "policy.json"
+
+
+class CheckpointError(ValueError):
+    """A checkpoint path that is not an RL training run or one of its models."""
+
+
+def resolve(checkpoint: str | None) -> tuple[pathlib.Path, dict]:
+    """The model file and the run's metadata for a run folder or model path."""
+    if checkpoint is None:
+        raise CheckpointError("policy=rl needs checkpoint=<runs/rl/... folder or model_<it>.pt>")
+    path = pathlib.Path(checkpoint)
+    run = path if path.is_dir() else path.parent
+    meta_path = run / META_FILE
+    if not meta_path.is_file():
+        raise CheckpointError(f"{run} has no {META_FILE}: pass a folder written by rl.py "
+                              "or a model_<it>.pt inside one")
+    if path.is_dir():
+        models = sorted(run.glob("model_*.pt"),
+                        key=lambda p: int(re.findall(r"\d+", p.stem)[-1]))
+        if not models:
+            raise CheckpointError(f"{run} holds no model_<it>.pt yet")
+        path = models[-1]
+    elif not path.is_file():
+        raise CheckpointError(f"no such checkpoint {path}")
+    return path, json.loads(meta_path.read_text())
+
+
+def spec(checkpoint: str | None) -> PolicySpec:
+    _, meta = resolve(checkpoint)
+    return PolicySpec(obs=tuple(meta["actor_groups"]), task=meta["task"],
+                      embodiment=meta["embodiment"], action_layout=tuple(meta["actuators"]))
+
+
+def load_actor(model_path: pathlib.Path, meta: dict, device: torch.device | str) -> MLPModel:
+    """The trained actor network (with its observation normalizer), in eval mode."""
+    net = meta["network"]
+    dummy = TensorDict({"actor": torch.zeros(1, meta["actor_dim"])}, batch_size=[1])
+    actor = MLPModel(dummy, {"actor": ["actor"]}, "actor", len(meta["actuators"]),
+                     hidden_dims=net["hidden_dims"], activation=net["activation"],
+                     obs_normalization=net["obs_normalization"],
+                     distribution_cfg={"class_name": "GaussianDistribution",
+                                       "init_std": float(net["init_noise_std"])})
+    state = torch.load(model_path, map_location="cpu", weights_only=False)
+    actor.load_state_dict(state["actor_state_dict"])
+    return actor.to(device).eval()
+
+
+class RlPolicy:
+    """Observation groups -> actor mean -> delta joint targets from the last targets."""
+
+    def __init__(self, model_path: pathlib.Path, meta: dict, env: DexEnv,
+                 device: torch.device | str) -> None:
+        self.spec = PolicySpec(obs=tuple(meta["actor_groups"]), task=meta["task"],
+                               embodiment=meta["embodiment"],
+                               action_layout=tuple(meta["actuators"]))
+        self._groups = tuple(meta["actor_groups"])
+        self._scale = float(meta["action_scale"])
+        self._device = device
+        self._actor = load_actor(model_path, meta, device)
+        self._low, self._high = env.action_low, env.action_high
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        """Stateless: the last targets come back in the `policy` observation group."""
+
+    @torch.no_grad()
+    def act(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
+        x = torch.cat([obs[g].float() for g in self._groups], dim=1).to(self._device)
+        action = self._actor(TensorDict({"actor": x}, batch_size=[len(x)]))
+        prev = obs["policy"].to(self._low.device)
+        return delta_targets(prev, action.to(self._low.device), self._low, self._high,
+                             self._scale)
+
+
+def build(checkpoint: str | None, env: DexEnv, device: torch.device | str) -> RlPolicy:
+    model_path, meta = resolve(checkpoint)
+    return RlPolicy(model_path, meta, env, device)

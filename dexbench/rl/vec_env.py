@@ -1,0 +1,134 @@
+"""RSL-RL's `VecEnv` over a batched `DexEnv`.
+
+Actions are deltas of the joint targets: the policy's output a (N, A), clipped to
+[-1, 1], moves each target by `action_scale` x half its actuator range per control step,
+from the targets applied last (the env's `policy` observation group, the home pose after
+a reset), so exploration noise makes a random walk rather than jumps across the range.
+The actor sees the state observation groups, the critic those plus `privileged`.
+Finished environments reset inside `step`; `time_outs` tells RSL-RL which were cut by
+the time limit (so their value is bootstrapped). Per-iteration success and reward go to
+`curve` (success vs wall time).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import torch
+from rsl_rl.env import VecEnv
+from tensordict import TensorDict
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.rl.rewards import RewardTerms, RewardWeights
+
+ACTOR_GROUPS = ("policy", "proprio", "contact", "state", "goal")
+CRITIC_EXTRA = ("privileged",)
+
+
+def actor_groups(env: DexEnv) -> tuple[str, ...]:
+    """The state groups this task populates, in the actor's (fixed) order."""
+    return tuple(g for g in ACTOR_GROUPS if g in env.obs_shapes())
+
+
+def delta_targets(prev_targets: torch.Tensor, action: torch.Tensor, low: torch.Tensor,
+                  high: torch.Tensor, scale: float) -> torch.Tensor:
+    """Joint targets after a delta action (shared by training and the `rl` policy)."""
+    half = (high - low) / 2
+    step = scale * half * action.clamp(-1.0, 1.0).to(half.dtype)
+    return torch.minimum(torch.maximum(prev_targets.to(half.dtype) + step, low), high)
+
+
+@dataclass
+class Curve:
+    """Success rate and mean reward of the episodes finished in each iteration."""
+
+    start: float = field(default_factory=time.perf_counter)
+    points: list[dict] = field(default_factory=list)
+    _finished: int = 0
+    _successes: int = 0
+    _reward: float = 0.0
+    _steps: int = 0
+
+    def add(self, done: torch.Tensor, success: torch.Tensor, reward: torch.Tensor) -> None:
+        self._finished += int(done.sum())
+        self._successes += int((done & success).sum())
+        self._reward += float(reward.mean())
+        self._steps += 1
+
+    def close_iteration(self, env_steps: int) -> dict:
+        point = {"iteration": len(self.points), "wall_s": time.perf_counter() - self.start,
+                 "env_steps": env_steps, "episodes": self._finished,
+                 "success_rate": self._successes / self._finished if self._finished else None,
+                 "mean_reward": self._reward / max(self._steps, 1)}
+        self.points.append(point)
+        self._finished = self._successes = self._steps = 0
+        self._reward = 0.0
+        return point
+
+
+class RslVecEnv(VecEnv):
+    """A `DexEnv` (built with `auto_reset=False` and the actor + critic groups) for RSL-RL."""
+
+    def __init__(self, env: DexEnv, action_scale: float, weights: RewardWeights,
+                 steps_per_iteration: int, cfg: dict | None = None) -> None:
+        if env.auto_reset:
+            raise ValueError("build the env with auto_reset=False: RslVecEnv resets it")
+        self.env = env
+        self.num_envs = env.num_envs
+        self.num_actions = env.action_dim
+        self.max_episode_length = env.episode_steps
+        self.device = env.device
+        self.cfg = cfg or {}
+        self.action_scale = action_scale
+        self.actor_groups = actor_groups(env)
+        have = env.obs_shapes()
+        self.critic_groups = self.actor_groups + tuple(g for g in CRITIC_EXTRA if g in have)
+        self.rewards = RewardTerms(env, weights)
+        self._steps_per_iteration = steps_per_iteration
+        self._total_steps = 0
+        self._prev_action = torch.zeros(env.num_envs, env.action_dim, device=env.device)
+        self._obs = env.reset()
+        self.curve = Curve()
+
+    @property
+    def episode_length_buf(self) -> torch.Tensor:
+        return self.env.steps
+
+    @episode_length_buf.setter
+    def episode_length_buf(self, value: torch.Tensor) -> None:
+        """RSL-RL spreads the first time-outs by starting episodes at random lengths."""
+        self.env.steps[:] = value.to(self.env.steps)
+
+    def _pack(self, obs: dict[str, torch.Tensor]) -> TensorDict:
+        actor = torch.cat([obs[g] for g in self.actor_groups], dim=1)
+        critic = torch.cat([obs[g] for g in self.critic_groups], dim=1)
+        return TensorDict({"actor": actor, "critic": critic}, batch_size=[self.num_envs],
+                          device=self.device)
+
+    def get_observations(self) -> TensorDict:
+        return self._pack(self._obs)
+
+    def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor,
+                                                   dict]:
+        env = self.env
+        action = actions.to(self.device).clamp(-1.0, 1.0)
+        targets = delta_targets(env.last_action, action, env.action_low, env.action_high,
+                                self.action_scale)
+        obs, task_reward, terminated, truncated, info = env.step(targets)
+        reward, terms = self.rewards(task_reward, obs, action, self._prev_action)
+        done = terminated | truncated
+        self._prev_action = action.clone()
+        ids = done.nonzero().flatten()
+        if len(ids):
+            obs = env.reset(ids)
+            self._prev_action[ids] = 0.0
+        self._obs = obs
+        self.curve.add(done, info["success"], reward)
+        self._total_steps += 1
+        if self._total_steps % self._steps_per_iteration == 0:
+            self.curve.close_iteration(self._total_steps * self.num_envs)
+        log = {f"/reward/{k}": v.mean() for k, v in terms.items()}
+        log["/sim_warnings"] = info["sim_warnings"].float().mean()
+        extras = {"time_outs": truncated & ~terminated, "log": log}
+        return self._pack(obs), reward, done.long(), extras

@@ -1,0 +1,79 @@
+"""RL: the RSL-RL wrapper, delta actions, reward terms, a PPO smoke run on the CPU backend
+and its checkpoint driving an env through the `rl` policy kind."""
+
+import json
+
+import pytest
+import torch
+
+from dexbench.cli.config import load_config
+from dexbench.cli.rl import build_env, train
+from dexbench.policies import rl as rl_policy
+from dexbench.rl.rewards import RewardTerms, RewardWeights
+from dexbench.rl.vec_env import RslVecEnv, delta_targets
+from dexbench.tasks.registry import make_env
+
+
+def test_delta_targets_scale_by_half_range_and_clip():
+    low, high = torch.tensor([-1.0, 0.0]), torch.tensor([1.0, 4.0])
+    prev = torch.tensor([[0.0, 3.9]])
+    out = delta_targets(prev, torch.tensor([[0.5, 5.0]]), low, high, scale=0.1)
+    torch.testing.assert_close(out, torch.tensor([[0.05, 4.0]]))  # 0.1*1*0.5; clipped
+
+
+@pytest.fixture(scope="module")
+def vec():
+    cfg = load_config("rl", ["sim.backend=cpu", "num_envs=3", "sim.nthread=1"])
+    env = build_env(cfg)
+    return RslVecEnv(env, 0.05, RewardWeights(), steps_per_iteration=2)
+
+
+def test_vec_env_observations_rewards_and_time_outs(vec):
+    env = vec.env
+    obs = vec.get_observations()
+    assert obs["critic"].shape[1] > obs["actor"].shape[1]  # + privileged
+    vec.episode_length_buf = torch.full((3,), env.episode_steps - 1)
+    action = torch.zeros(3, vec.num_actions)
+    action[0] = 1.0
+    obs, reward, dones, extras = vec.step(action)
+    assert dones.tolist() == [1, 1, 1] and extras["time_outs"].all()
+    assert env.steps.tolist() == [0, 0, 0]  # reset inside step
+    assert torch.isfinite(reward).all() and obs["actor"].shape[0] == 3
+    assert extras["log"]["/reward/action_l2"] < 0
+    vec.step(torch.zeros(3, vec.num_actions))
+    assert vec.curve.points[-1]["episodes"] == 3  # one iteration of two steps closed
+
+
+def test_lift_tasks_get_the_grasp_term(vec):
+    _, terms = RewardTerms(vec.env, RewardWeights())(
+        torch.zeros(3), vec.env.reset(), torch.zeros(3, vec.num_actions),
+        torch.zeros(3, vec.num_actions))
+    assert terms["lift_when_grasping"].tolist() == [0.0, 0.0, 0.0]  # resting on the table
+
+
+def test_ppo_smoke_run_and_rl_policy(tmp_path, monkeypatch):
+    monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
+    result = train(["sim.backend=cpu", "num_envs=4", "sim.nthread=1", "rl.max_iterations=2",
+                    "rl.chunk=1", "rl.network.hidden_dims=[32,32]"])
+    run = tmp_path / "rl" / next(p.name for p in (tmp_path / "rl").iterdir())
+    assert result["iterations"] == 2 and result["env_steps"] == 2 * 8 * 4
+    assert {"model_0.pt", "model_1.pt", "policy.json", "curve.png", "curve.jsonl",
+            "metrics.json", "config.yaml"} <= {p.name for p in run.iterdir()}
+    assert len((run / "curve.jsonl").read_text().splitlines()) == 2
+    spec = rl_policy.spec(str(run))
+    assert spec.task == "PickCube" and "privileged" not in spec.obs
+    env = make_env("PickCube", num_envs=2, obs=list(spec.obs), nthread=1)
+    policy = rl_policy.build(str(run / "model_1.pt"), env, "cpu")
+    obs = env.reset()
+    action = policy.act(obs)
+    assert action.shape == (2, env.action_dim)
+    assert (action >= env.action_low).all() and (action <= env.action_high).all()
+    step = (action - obs["policy"].double()).abs() / (env.action_high - env.action_low)
+    assert step.max() <= json.loads((run / "policy.json").read_text())["action_scale"] / 2 + 1e-6
+
+
+def test_rl_checkpoint_errors_say_what_to_pass(tmp_path):
+    with pytest.raises(rl_policy.CheckpointError, match="checkpoint="):
+        rl_policy.spec(None)
+    with pytest.raises(rl_policy.CheckpointError, match=r"policy\.json"):
+        rl_policy.spec(str(tmp_path))
