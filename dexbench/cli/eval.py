@@ -25,7 +25,14 @@ import yaml
 from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
-from dexbench.cli.config import ConfigError, env_kwargs, load_config, runs_root, write_atomic
+from dexbench.cli.config import (
+    ConfigError,
+    env_kwargs,
+    load_config,
+    new_run_dir,
+    runs_root,
+    write_atomic,
+)
 from dexbench.envs.dex_env import DexEnv
 from dexbench.eval.merge import RESULTS_FILE
 from dexbench.eval.metrics import summarize
@@ -34,8 +41,9 @@ from dexbench.eval.plot import category_chart
 from dexbench.eval.records import EpisodeLog, EpisodeRecord
 from dexbench.eval.runner import run_episodes
 from dexbench.eval.tables import write_tables
+from dexbench.eval.throughput import episodes_per_minute, model_module, untrained_checkpoint
 from dexbench.eval.video import EpisodeCamera, EpisodeVideos
-from dexbench.policies.common.protocol import Policy, check_action_layout
+from dexbench.policies.common.protocol import Policy, PolicySpec, check_action_layout
 from dexbench.policies.registry import policy_module
 from dexbench.tasks.registry import TASKS, make_env
 
@@ -68,16 +76,18 @@ def eval_config(argv: list[str]) -> tuple[DictConfig, pathlib.Path | None]:
 
 
 def task_groups(cfg: DictConfig) -> tuple[str, dict[str, list[str]]]:
-    """(label, category -> tasks): the split's, or the one task's."""
+    """(label, category -> tasks): the split's, else those of `tasks` or `task`."""
     split = cfg.get("split")
     if split is not None:
         if not isinstance(split, DictConfig) or "categories" not in split:
             raise EvalError("split must be chosen with +split=<name> (conf/split/)")
         return str(split.name), {str(c): [str(t) for t in ts]
                                  for c, ts in split.categories.items()}
-    task = str(cfg.task)
-    category = TASKS[task].category if task in TASKS else "unknown"
-    return task, {category: [task]}
+    tasks = [str(t) for t in cfg.tasks] if cfg.get("tasks") else [str(cfg.task)]
+    groups: dict[str, list[str]] = {}
+    for task in tasks:
+        groups.setdefault(TASKS[task].category if task in TASKS else "unknown", []).append(task)
+    return "+".join(tasks), groups
 
 
 def _identity(cfg: DictConfig, label: str, groups: dict[str, list[str]]) -> dict:
@@ -142,11 +152,11 @@ def plan_tasks(cfg: DictConfig) -> tuple[list[TaskPlan], dict[str, str]]:
     """Every task's plan, or an error naming the tasks that cannot run (unless
     `+skip_missing=true`, which returns them as skipped with their reasons)."""
     label, groups = task_groups(cfg)
-    module = policy_module(policy_kind(cfg))
+    kind = policy_kind(cfg)
     plans, problems = [], {}
     for category, tasks in groups.items():
         for task in tasks:
-            plan = plan_task(task, category, module, cfg.checkpoint, cfg.embodiment)
+            plan = plan_task(task, category, kind, cfg.checkpoint, cfg.embodiment)
             if isinstance(plan, TaskPlan):
                 plans.append(plan)
             else:
@@ -302,3 +312,51 @@ def main(argv: list[str]) -> int:
                       "complete": summary["complete"], "run_dir": str(run_dir),
                       "results": str(run_dir / RESULTS_FILE)}))
     return 0 if summary["complete"] else 1
+
+
+def bench_eval(argv: list[str]) -> dict:
+    """`python bench.py eval`: episodes/min of `num_envs` batched envs against one env at
+    a time, same policy and horizon; a JSON-ready result."""
+    cfg = load_config("bench_eval", argv)
+    kind = policy_kind(cfg)
+    n, episodes, sequential = int(cfg.num_envs), int(cfg.episodes), int(cfg.sequential_episodes)
+    if min(n, episodes, sequential, int(cfg.horizon)) < 1:
+        raise EvalError("num_envs, episodes, sequential_episodes and horizon must be >= 1")
+    run_dir = new_run_dir("bench", f"eval-{kind}-{cfg.task}", cfg)
+    checkpoint = cfg.checkpoint
+    if checkpoint is None and kind != "expert":
+        task = str(cfg.task)
+        if task not in TASKS:
+            raise EvalError(f"task={task} is not implemented (`python -m dexbench list tasks`)")
+        try:
+            spec = PolicySpec(obs=model_module(kind).OBS)
+        except ValueError as err:
+            raise EvalError(str(err)) from None
+        embodiment = cfg.embodiment or TASKS[task].default_embodiment
+        probe = build_env(cfg, TaskPlan(task, "", embodiment, None, spec), 2)
+        checkpoint = str(untrained_checkpoint(kind, OmegaConf.to_container(cfg.policy), probe,
+                                              run_dir / "untrained.pt"))
+    plan = plan_task(str(cfg.task), "", kind, checkpoint, cfg.embodiment)
+    if not isinstance(plan, TaskPlan):
+        raise EvalError(f"{cfg.task}: {plan}")
+    rates = {}
+    for label, width, count in (("batched", n, episodes), ("sequential", 1, sequential)):
+        env = build_env(cfg, plan, width)
+        policy = build_policy(cfg, plan, env)
+        bar = tqdm(total=count, desc=f"{label} x{width}", unit="episode",
+                   disable=not cfg.progress, leave=False)
+        with bar:
+            rates[label] = episodes_per_minute(env, policy, count, int(cfg.seed),
+                                               lambda _, bar=bar: bar.update(1))
+        print(f"{label}: {rates[label]:,.1f} episodes/min ({width} env(s), {count} "
+              f"episodes of up to {cfg.horizon} steps)")
+    result = {"benchmark": "eval", "task": plan.task, "embodiment": plan.embodiment,
+              "policy": kind, "checkpoint": checkpoint, "num_envs": n, "horizon": int(
+                  cfg.horizon), "batched_episodes": episodes, "sequential_episodes": sequential,
+              "device": _device(cfg.device), "torch_threads": torch.get_num_threads(),
+              "batched_eps_per_min": round(rates["batched"], 2),
+              "sequential_eps_per_min": round(rates["sequential"], 2),
+              "ratio": round(rates["batched"] / rates["sequential"], 2),
+              "run_dir": str(run_dir)}
+    write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
+    return result

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import pathlib
 from dataclasses import dataclass
-from types import ModuleType
 
 from dexbench.embodiments.builder import parse_embodiment
 from dexbench.policies.common.protocol import PolicySpec
+from dexbench.policies.registry import policy_module
 from dexbench.tasks.registry import TASKS
 
 
@@ -25,33 +25,37 @@ class TaskPlan:
     spec: PolicySpec
 
 
-def checkpoint_for(checkpoint: str | None, task: str) -> str | None:
-    """A folder holding one entry per task (`<folder>/<task>`) gives each task its own
-    checkpoint; anything else is passed to the policy kind as it is."""
+def checkpoint_for(checkpoint: str | None, task: str, embodiment: str, kind: str) -> str | None:
+    """A folder laid out as `train.py` writes runs (`<folder>/<task>/<embodiment>/<kind>/`)
+    or holding one entry per task (`<folder>/<task>`) gives each task its own checkpoint;
+    anything else is passed to the policy kind as it is."""
     if checkpoint is None:
         return None
-    per_task = pathlib.Path(checkpoint) / task
-    return str(per_task) if per_task.exists() else checkpoint
+    root = pathlib.Path(checkpoint)
+    for per_task in (root / task / embodiment / kind, root / task):
+        if per_task.exists():
+            return str(per_task)
+    return checkpoint
 
 
 def _arity(name: str) -> str:
     return "two hands" if parse_embodiment(name).bimanual else "one hand"
 
 
-def plan_task(task: str, category: str, module: ModuleType, checkpoint: str | None,
+def plan_task(task: str, category: str, kind: str, checkpoint: str | None,
               embodiment: str | None) -> TaskPlan | str:
-    """The plan for `task`, or the reason it cannot be evaluated."""
+    """The plan for policy `kind` on `task`, or the reason it cannot be evaluated."""
     if task not in TASKS:
         return "not implemented yet (`python -m dexbench list tasks` lists those that are)"
-    ckpt = checkpoint_for(checkpoint, task)
+    cls = TASKS[task]
+    ckpt = checkpoint_for(checkpoint, task, embodiment or cls.default_embodiment, kind)
     try:
-        spec = module.spec(ckpt)
+        spec = policy_module(kind).spec(ckpt)
     except (ValueError, OSError) as err:
         return f"policy cannot be loaded: {err}"
     if spec.task is not None and spec.task != task:
         return (f"the checkpoint was trained on {spec.task}; give a folder with one "
                 "checkpoint per task (<folder>/<task>)")
-    cls = TASKS[task]
     name = embodiment or spec.embodiment or cls.default_embodiment
     if parse_embodiment(name).bimanual != parse_embodiment(cls.default_embodiment).bimanual:
         return (f"the task needs {_arity(cls.default_embodiment)}; embodiment {name} has "

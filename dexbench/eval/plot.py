@@ -32,11 +32,12 @@ def category_chart(summary: dict, path: pathlib.Path) -> None:
         ax.axhline(summary["overall"], color="#c0392b", linestyle="--", linewidth=1,
                    label=f"overall {summary['overall']:.2f}")
     ax.set_xticks(list(xs), [c["category"] for c in cats], rotation=30, ha="right")
-    ax.set_ylim(0, 1.05)
+    ax.set_xlim(-0.7, len(cats) - 0.3)
+    ax.set_ylim(0, 1.18)
     ax.set_ylabel("success rate")
     ax.set_title(f"{summary['policy_label']} on {summary['label']} "
                  f"({summary['episodes_per_task']} episodes/task, 95% Wilson CI)", fontsize=9)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper left", ncol=2, frameon=False)
     fig.tight_layout()
     tmp = path.with_name(f".{path.name}.tmp")
     fig.savefig(tmp, format="png")

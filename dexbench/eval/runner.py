@@ -45,7 +45,7 @@ def run_episodes(env: DexEnv, policy: Policy, episodes: Sequence[int], seed: int
         if videos is not None:
             for slot, ep in zip(take, eps, strict=True):
                 videos.begin(int(slot), ep)
-            videos.capture()
+            videos.capture([int(s) for s in take])
         return obs
 
     obs = begin(np.arange(n))

@@ -82,8 +82,9 @@ class EpisodeVideos:
         if episode in self.episodes:
             self._frames[slot], self._episode[slot] = [], episode
 
-    def capture(self) -> None:
-        slots = sorted(self._frames)
+    def capture(self, slots: list[int] | None = None) -> None:
+        """Add the current frame of those recording slots (default: all of them)."""
+        slots = sorted(self._frames) if slots is None else [s for s in slots if s in self._frames]
         for slot, frame in zip(slots, self.camera.render(slots), strict=True):
             self._frames[slot].append(frame)
 
