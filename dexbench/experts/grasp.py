@@ -49,7 +49,8 @@ class GraspPlan:
     object's size; `side` grasps (upright cylinders) hold the object in a handshake
     pose instead of from above, `pitch` (rad) tilts the fingers down from the top grasp
     (90 deg: hanging, palm towards the object, to hook a handle). `yaw` is "box" (the
-    object's face yaw nearest to the approach), "body" (the object's yaw) or "none".
+    object's face yaw nearest to the approach), "body" (the object's yaw) or "none",
+    turned further by `yaw_offset` (rad, or `yaw_offset(env) -> (N,)`).
     After the grasp the object is lifted `lift` metres, or, with
     `target(env) -> (N, 3)`, carried until its `goal_point` (body frame) is there; with
     `release`, the hand then opens and backs off (placing), as it does whenever
@@ -61,6 +62,7 @@ class GraspPlan:
     point: tuple[float, float, float] = (0.0, 0.0, 0.0)
     shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
     yaw: str = "box"
+    yaw_offset: float | Callable[[DexEnv], np.ndarray] = 0.0
     side: bool = False
     pitch: float = 0.0
     synergy: str = "power"
@@ -143,6 +145,8 @@ class GraspExpert:
     def _plan_grasp(self, ids: np.ndarray, point: np.ndarray, quat: np.ndarray) -> None:
         yaw = {"box": box_yaw, "body": body_yaw,
                "none": lambda q: np.zeros(len(q))}[self.plan.yaw](quat[ids])
+        offset = self.plan.yaw_offset
+        yaw = yaw + (offset(self.env)[ids] if callable(offset) else offset)
         rot = yawed(HANDSHAKE_ROT, yaw) if self.plan.side else palm_down(yaw)
         rot = rot @ pitch_down(self.plan.pitch)
         self.grasp_rot[ids] = rot

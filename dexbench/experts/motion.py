@@ -42,6 +42,15 @@ def pitch_down(angle: float) -> np.ndarray:
     return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
 
 
+def turned(axes: np.ndarray, angle: float | np.ndarray) -> np.ndarray:
+    """(N, 3, 3) turns by `angle` (rad; scalar or (N,)) about unit axes (N, 3)."""
+    k = np.zeros((len(axes), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axes[:, 2], axes[:, 1], -axes[:, 0]
+    k -= k.transpose(0, 2, 1)
+    angle = np.broadcast_to(np.asarray(angle, dtype=float), (len(axes),))[:, None, None]
+    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+
+
 def step_towards(pos: np.ndarray, rot: np.ndarray, target_pos: np.ndarray,
                  target_rot: np.ndarray, max_dist: float | np.ndarray, max_angle: float
                  ) -> tuple[np.ndarray, np.ndarray]:

@@ -19,10 +19,12 @@ Subgoal = Callable[[DexEnv], torch.Tensor]
 
 
 class SequenceExpert:
-    """`steps`: (expert, subgoal) pairs; the last subgoal is never consulted."""
+    """`steps`: (expert, subgoal) pairs; the last subgoal is never consulted. Where
+    `restart(env)` holds (e.g. a held object was dropped), an env starts over."""
 
-    def __init__(self, env: DexEnv, steps: Sequence[tuple[Expert, Subgoal]]) -> None:
-        self.env, self.steps = env, list(steps)
+    def __init__(self, env: DexEnv, steps: Sequence[tuple[Expert, Subgoal]],
+                 restart: Subgoal | None = None) -> None:
+        self.env, self.steps, self.restart = env, list(steps), restart
         self.stage = np.zeros(env.num_envs, dtype=np.int64)
 
     def reset(self, env_ids: torch.Tensor) -> None:
@@ -31,6 +33,11 @@ class SequenceExpert:
         self.steps[0][0].reset(torch.as_tensor(ids))
 
     def act(self) -> torch.Tensor:
+        if self.restart is not None:
+            again = (self.stage > 0) & self.restart(self.env).cpu().numpy()
+            if again.any():
+                self.stage[again] = 0
+                self.steps[0][0].reset(torch.as_tensor(np.flatnonzero(again)))
         for k, (_, done) in enumerate(self.steps[:-1]):
             handover = (self.stage == k) & done(self.env).cpu().numpy()
             if handover.any():

@@ -1,0 +1,113 @@
+"""Insert a held peg into a hole: line its axis up with the bore, then push it home.
+
+The grasp comes first (`GraspExpert`, lifting the peg a little); this expert takes over
+the closed hand. Every step it reads where the peg actually is in the hand (head point
+and shaft axis), turns the hand by the rotation that takes the shaft onto the bore axis
+and moves it so the head goes first in front of the entrance, then into the bore. The
+peg is held across its shaft near the grip, so turning the hand about the vertical does
+not make it pivot between the fingers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.motion import body_yaw, step_towards, turned
+
+SPEED = 0.15  # m/s while lining up
+PUSH_SPEED = 0.04  # m/s into the bore
+TURN_RATE = 1.0  # rad/s
+STANDOFF = 0.03  # m in front of the entrance where the head lines up
+LINED_UP = 0.005  # m of head offset from the line-up point ...
+ALIGNED = np.radians(4.0)  # ... and shaft angle from the bore axis, before pushing
+JAMMED = np.radians(8.0)  # shaft angle while pushing: back out and line up again
+PUSH_PAST = 0.01  # m the push aims beyond the target (the bottom stops it)
+
+
+@dataclass(frozen=True)
+class InsertPlan:
+    """The peg's `head` point and `shaft` axis (peg frame), the hole's `entrance` and
+    `target` points and `bore` axis (hole frame, pointing out of the hole)."""
+
+    peg: str
+    head: tuple[float, float, float]
+    shaft: tuple[float, float, float]
+    hole: str
+    entrance: tuple[float, float, float]
+    target: tuple[float, float, float]
+    bore: tuple[float, float, float]
+
+
+class InsertExpert:
+    """Line up, then push in; the hand stays closed on the peg throughout."""
+
+    def __init__(self, env: DexEnv, plan: InsertPlan, side: str = "right") -> None:
+        self.env, self.plan, self.side = env, plan, side
+        self.adapter = ActionAdapter(env)
+        self._palm = env.scene.model.site(env.embodiment.sides[side].palm_site).id
+        n = env.num_envs
+        self.pos = np.zeros((n, 3))
+        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.pushing = np.zeros(n, dtype=bool)
+
+    def _palm_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        sim = self.env.sim
+        pos = sim.field("site_xpos")[:, self._palm].numpy().copy()
+        return pos, sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3).copy()
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        pos, rot = self._palm_pose()
+        self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
+        self.pushing[ids] = False
+        self.adapter.reset(ids)
+
+    def act(self) -> torch.Tensor:
+        view, plan = self.env.view, self.plan
+        head = view.point_pos(plan.peg, plan.head).numpy()
+        shaft = view.axis(plan.peg, plan.shaft).numpy()
+        inward = -view.axis(plan.hole, plan.bore).numpy()
+        entrance = view.point_pos(plan.hole, plan.entrance).numpy()
+        line_up = entrance - (STANDOFF * inward)
+        home = view.point_pos(plan.hole, plan.target).numpy() + PUSH_PAST * inward
+        angle = np.arccos(np.clip((shaft * inward).sum(axis=1), -1.0, 1.0))
+        self.pushing |= ((np.linalg.norm(head - line_up, axis=1) < LINED_UP)
+                         & (angle < ALIGNED))
+        self.pushing &= angle < JAMMED
+        goal = np.where(self.pushing[:, None], home, line_up)
+        # The turn taking the shaft onto the bore axis, about the palm.
+        axis = np.cross(shaft, inward)
+        norm = np.linalg.norm(axis, axis=1, keepdims=True)
+        axis = np.where(norm > 1e-9, axis / np.maximum(norm, 1e-9), [0.0, 0.0, 1.0])
+        turn = turned(axis, angle)
+        palm, palm_rot = self._palm_pose()
+        target_pos = goal - np.einsum("nij,nj->ni", turn, head - palm)
+        target_rot = turn @ palm_rot
+        speed = np.where(self.pushing, PUSH_SPEED, SPEED)[:, None] * self.env.control_dt
+        self.pos, self.rot = step_towards(self.pos, self.rot, target_pos, target_rot, speed,
+                                          TURN_RATE * self.env.control_dt)
+        closure = np.ones(self.env.num_envs)
+        return self.adapter.actions({self.side: HandCommand(self.pos, self.rot, closure)})
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+def across_shaft(peg: str, hole: str) -> Callable[[DexEnv], np.ndarray]:
+    """Grasp yaw offsets (N,) from the peg's yaw: fingers across the shaft, on the side
+    from which the hand's turn that lines the peg up with the hole's yaw crosses no
+    wrist limit (a floating wrist's yaw stays within +-pi)."""
+    def offset(env: DexEnv) -> np.ndarray:
+        view = env.view
+        peg_yaw = body_yaw(view.body_quat(peg).numpy())
+        turn = _wrap(body_yaw(view.body_quat(hole).numpy()) - peg_yaw)
+        hand = _wrap(peg_yaw + np.pi / 2)
+        return np.where(np.abs(hand + turn) < np.pi, np.pi / 2, -np.pi / 2)
+    return offset
