@@ -21,6 +21,7 @@ import mujoco.batch
 import torch
 from tqdm import tqdm
 
+from dexbench.cli.bench_warp import bench_sim_warp
 from dexbench.cli.config import env_kwargs, load_config, new_run_dir, write_atomic
 from dexbench.cli.eval import bench_eval
 from dexbench.envs.dex_env import DexEnv
@@ -45,6 +46,8 @@ def _actions(env: DexEnv, count: int, noise: float, seed: int) -> list[torch.Ten
 
 def bench_sim(overrides: list[str]) -> dict:
     cfg = load_config("bench", overrides)
+    if cfg.sim.backend == "warp":
+        return bench_sim_warp(cfg)
     env = make_env(**env_kwargs(cfg))
     run_dir = new_run_dir("bench", f"sim-{env.task.name}-{env.embodiment.name}", cfg)
     n, steps, warmup = env.num_envs, int(cfg.steps), int(cfg.warmup)
@@ -164,13 +167,19 @@ def _gpu_name() -> str | None:
 
 
 def format_table(result: dict) -> str:
+    where = result.get("device") or f"{result['nthread']} threads"
     rows = [("task", result["task"]), ("embodiment", result["embodiment"]),
-            ("backend", f"{result['backend']} ({result['nthread']} threads)"),
+            ("backend", f"{result['backend']} ({where})"),
             ("num_envs", result["num_envs"]), ("decimation", result["decimation"]),
             ("env steps/s (60 Hz control)", f"{result['env_steps_per_s']:,.0f}"),
             ("env physics steps/s", f"{result['env_physics_steps_per_s']:,.0f}"),
             ("raw physics steps/s", f"{result['raw_physics_steps_per_s']:,.0f}"),
             ("ratio env/raw", f"{result['ratio']:.3f}")]
+    if "camera_env_steps_per_s" in result:
+        w, h = result["camera_resolution"]
+        rows += [(f"+ 1 RGB-D {w}x{h} camera, envs", result["camera_num_envs"]),
+                 ("  env steps/s", f"{result['camera_env_steps_per_s']:,.0f}"),
+                 ("  images/s", f"{result['camera_images_per_s']:,.0f}")]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
