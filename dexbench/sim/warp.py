@@ -168,17 +168,17 @@ class WarpBackend:
         for name in _DERIVED_CONSTANTS:
             if getattr(self.m, name).size:
                 self._expand(name)
-        with wp.ScopedDevice(self.wp_device):
-            mjw.set_const(self.m, self.d)
+        self._run(None, lambda: mjw.set_const(self.m, self.d))
 
     def warning_counts(self) -> torch.Tensor:
         """(num_envs,) control steps with a contact/constraint overflow or a non-finite
         state since each world's reset."""
         return wp.to_torch(self._warnings).long()
 
-    def _run(self, key: tuple, fn) -> None:
-        """Run `fn` as a captured CUDA graph (captured on first use), ordered after and
-        before the torch work on the current stream; plain launches on the CPU."""
+    def _run(self, key: tuple | None, fn) -> None:
+        """Run `fn`'s warp work ordered after the torch work queued so far and before the
+        torch work that follows; with a `key`, as a CUDA graph captured on first use.
+        On the CPU device: plain launches."""
         if not self.graphs_enabled:
             with wp.ScopedDevice(self.wp_device):
                 fn()
@@ -186,11 +186,14 @@ class WarpBackend:
         torch_stream = wp.stream_from_torch(torch.cuda.current_stream(self.device))
         with wp.ScopedDevice(self.wp_device), wp.ScopedStream(self._stream):
             self._stream.wait_stream(torch_stream)
-            if key not in self._graphs:
-                with wp.ScopedCapture() as capture:
-                    fn()
-                self._graphs[key] = capture.graph
-            wp.capture_launch(self._graphs[key])
+            if key is None:
+                fn()
+            else:
+                if key not in self._graphs:
+                    with wp.ScopedCapture() as capture:
+                        fn()
+                    self._graphs[key] = capture.graph
+                wp.capture_launch(self._graphs[key])
             torch_stream.wait_stream(self._stream)
 
     def _forward(self, acceleration: bool) -> None:
@@ -237,10 +240,9 @@ class WarpBackend:
 
     def get_state(self, spec: int = INTEGRATION) -> torch.Tensor:
         size = mujoco.mj_stateSize(self.model, spec)
-        with wp.ScopedDevice(self.wp_device):
-            state = wp.zeros((self.num_envs, size), dtype=wp.float32)
-            mjw.get_state(self.m, self.d, state, spec)
-        return wp.to_torch(state).double()
+        state = torch.zeros(self.num_envs, size, dtype=torch.float32, device=self.device)
+        self._run(None, lambda: mjw.get_state(self.m, self.d, wp.from_torch(state), spec))
+        return state.double()
 
     def set_state(self, env_ids: torch.Tensor, state: torch.Tensor, spec: int = INTEGRATION,
                   acceleration: bool = False) -> None:
@@ -250,7 +252,6 @@ class WarpBackend:
         full[rows] = torch.as_tensor(state, device=self.device).float().reshape(len(rows), size)
         active = torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)
         active[rows] = True
-        with wp.ScopedDevice(self.wp_device):
-            mjw.set_state(self.m, self.d, wp.from_torch(full), spec,
-                          wp.from_torch(active))
+        self._run(None, lambda: mjw.set_state(self.m, self.d, wp.from_torch(full), spec,
+                                              wp.from_torch(active)))
         self.forward(rows, acceleration)
