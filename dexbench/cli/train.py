@@ -20,10 +20,8 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 
 from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, runs_root
-from dexbench.cli.replay import FROM_DATASET
 from dexbench.data.files import write_json
 from dexbench.data.meta import DatasetError
-from dexbench.data.replay import default_out, replay_states
 from dexbench.policies.common.checkpoint import save_checkpoint
 from dexbench.policies.common.demos import Demos, available_groups, load_demos
 from dexbench.policies.common.run_log import RunLog
@@ -68,6 +66,11 @@ def training_data(cfg: DictConfig, model: ModuleType) -> Demos:
     except ValueError:
         if model.OBS == "state":
             raise
+        # Replay renders through LeRobot's writer: imported only when a replay is due,
+        # so training from existing replays needs neither.
+        from dexbench.cli.replay import FROM_DATASET
+        from dexbench.data.replay import default_out, replay_states
+
         replayed = default_out(root, model.OBS)
         if not replayed.exists():
             print(f"replaying {root} to obs={model.OBS} -> {replayed}", file=sys.stderr)
