@@ -15,7 +15,9 @@ import pytest
 from dexbench.cli import collect as collect_cli
 from dexbench.cli import eval as eval_cli
 from dexbench.cli import train as train_cli
+from dexbench.cli.config import ConfigError
 from dexbench.cli.eval import EvalError, eval_config, evaluate, plan_tasks, prepare
+from dexbench.cli.merge import merge
 from dexbench.eval.merge import MergeError, markdown, merge_runs, write_merged
 from dexbench.eval.merge import latex as merged_latex
 from dexbench.eval.metrics import summarize, wilson_interval
@@ -94,6 +96,11 @@ def test_tables_chart_and_merge_on_synthetic_results(tmp_path):
     assert sorted(paths) == ["csv", "md", "tex"] and all(p.exists() for p in paths.values())
     with pytest.raises(MergeError, match=r"no results\.json"):
         merge_runs([tmp_path])
+    assert merge([str(tmp_path / "a"), str(tmp_path / "b"), f"out={tmp_path / 'cli'}"]) == 0
+    rows = list(csv.reader((tmp_path / "cli/merged.csv").open()))
+    assert rows[0] == ["category", "task", "dp", "dp3"] and rows[-1][:2] == ["all", "mean"]
+    with pytest.raises(ConfigError, match="no results"):
+        merge([str(tmp_path)])
 
 
 def test_episode_log_drops_a_line_torn_by_a_kill(tmp_path):

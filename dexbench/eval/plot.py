@@ -4,6 +4,7 @@ their 95% Wilson intervals, the overall mean as a dashed line."""
 from __future__ import annotations
 
 import pathlib
+import textwrap
 
 import matplotlib
 
@@ -20,6 +21,7 @@ def category_chart(summary: dict, path: pathlib.Path) -> None:
     ax.bar(xs, [c["mean"] for c in cats], color="#8fb3d9", edgecolor="#2f5d8a", width=0.6,
            label="category mean")
     by_task = {t["task"]: t for t in summary["tasks"]}
+    label = "task (95% CI)"
     for x, cat in zip(xs, cats, strict=True):
         tasks = [by_task[t] for t in cat["tasks"]]
         offsets = [0.0] if len(tasks) == 1 else [
@@ -27,7 +29,9 @@ def category_chart(summary: dict, path: pathlib.Path) -> None:
         for dx, t in zip(offsets, tasks, strict=True):
             rate = t["success_rate"]
             ax.errorbar(x + dx, rate, yerr=[[rate - t["ci_low"]], [t["ci_high"] - rate]],
-                        fmt="o", color="#1b1b1b", markersize=3, capsize=2, linewidth=0.8)
+                        fmt="o", color="#1b1b1b", markersize=3, capsize=2, linewidth=0.8,
+                        label=label)
+            label = None
     if summary["overall"] is not None:
         ax.axhline(summary["overall"], color="#c0392b", linestyle="--", linewidth=1,
                    label=f"overall {summary['overall']:.2f}")
@@ -35,9 +39,11 @@ def category_chart(summary: dict, path: pathlib.Path) -> None:
     ax.set_xlim(-0.7, len(cats) - 0.3)
     ax.set_ylim(0, 1.18)
     ax.set_ylabel("success rate")
-    ax.set_title(f"{summary['policy_label']} on {summary['label']} "
-                 f"({summary['episodes_per_task']} episodes/task, 95% Wilson CI)", fontsize=9)
-    ax.legend(fontsize=7, loc="upper left", ncol=2, frameon=False)
+    head = textwrap.shorten(f"{summary['policy_label']} on {summary['label']}", width=70,
+                            placeholder="...")
+    ax.set_title(f"{head}\n{summary['episodes_per_task']} episodes per task, 95% Wilson "
+                 "intervals", fontsize=8)
+    ax.legend(fontsize=7, loc="upper left", ncol=3, frameon=False)
     fig.tight_layout()
     tmp = path.with_name(f".{path.name}.tmp")
     fig.savefig(tmp, format="png")
