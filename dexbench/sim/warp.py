@@ -118,10 +118,6 @@ class WarpBackend:
         self.per_world_model = False
         self._run(("forward", False), lambda: self._forward(False))
 
-    @property
-    def nthread(self) -> int:
-        return 1
-
     def _view(self, name: str) -> torch.Tensor:
         """A zero-copy (num_envs, ...) torch view of a Data field, shaped as on the CPU."""
         array = getattr(self.d, name)
