@@ -47,6 +47,9 @@ def markdown(summary: dict) -> str:
     lines.append(f"| **all** | **mean** | **{_rate(summary['overall'])}** | | "
                  f"{summary['episodes']} | |")
     notes = [f"- skipped {s['task']}: {s['reason']}" for s in summary["skipped"]]
+    notes += [f"- {t['task']}: {t['episodes']} of {summary['episodes_per_task']} episodes so "
+              "far (resume= continues)" for t in summary["tasks"]
+              if t["episodes"] < summary["episodes_per_task"]]
     if summary["pending"]:
         notes.append(f"- not evaluated yet: {', '.join(summary['pending'])}")
     lines += ["", *notes] if notes else []
