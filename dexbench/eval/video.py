@@ -9,7 +9,6 @@ from __future__ import annotations
 import copy
 import pathlib
 
-import av
 import mujoco
 import numpy as np
 
@@ -56,6 +55,7 @@ class EpisodeCamera:
 
 def write_mp4(frames: list[np.ndarray], path: pathlib.Path, fps: float) -> None:
     """H.264 MP4 of RGB frames, written to a temp file and renamed."""
+    import av  # PyAV (from lerobot[dataset]); imported here: runs without videos skip it
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp")
     height, width = frames[0].shape[:2]
