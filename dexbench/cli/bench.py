@@ -30,7 +30,7 @@ from dexbench.tasks.registry import make_env
 
 USAGE = """usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=...] ...
        python bench.py render [num_envs=16] [width=128] [height=128] [renderers=[cpu,warp]] ...
-       python bench.py eval [policy=dp] [checkpoint=...] [num_envs=50] [horizon=300] ..."""
+       python bench.py eval [policy=dp] [checkpoint=...] [num_envs=50] [horizon=32] ..."""
 
 
 def _actions(env: DexEnv, count: int, noise: float, seed: int) -> list[torch.Tensor]:
