@@ -176,15 +176,7 @@ def _check_lift(lift: float, spread: float) -> None:
     assert spread < 0.06, f"cube is {spread * 100:.1f} cm from the mean fingertip"
 
 
-LEAP_XFAIL = pytest.mark.xfail(
-    strict=True, reason="LEAP power synergy and grasp_offset were tuned in the old hand "
-    "frame (palm-origin finger axis, 15 deg off); they need re-tuning in the knuckle frame"
-)
-
-
-@pytest.mark.parametrize(
-    "hand", [pytest.param(h, marks=LEAP_XFAIL) if h == "leap" else h for h in HANDS]
-)
+@pytest.mark.parametrize("hand", list(HANDS))
 def test_floating_hand_lifts_cube(hand: str) -> None:
     """Top-down power grasp of a 0.1 kg, 5 cm cube at the hand's `grasp_offset`."""
     model, emb = _scene(f"floating_{hand}", cube=True)

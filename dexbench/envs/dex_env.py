@@ -38,6 +38,12 @@ STATE_SPEC = (int(_S.mjSTATE_FULLPHYSICS) | int(_S.mjSTATE_WARMSTART) | int(_S.m
               | int(_S.mjSTATE_USERDATA))
 
 
+# An episode terminates as a success once the task's condition has held this many
+# consecutive control steps (1/6 s at 60 Hz), the authors' rule for recording a demo: a
+# condition met for an instant (an object bouncing through a threshold) is not success.
+SUCCESS_HOLD_STEPS = 10
+
+
 class InvalidActionError(ValueError):
     """An action batch with the wrong shape or non-finite values."""
 
@@ -51,7 +57,8 @@ class DexEnv:
     (default: the preset's: front, or front/left/right when multiview; wrist cameras are
     `<side>/hand/wrist_cam`) at `image_size` (width, height) with `renderer` (`cpu`:
     OpenGL, `warp`: mujoco_warp ray tracing on the GPU); the point cloud keeps
-    `num_points` points.
+    `num_points` points. `terminated` is success held for `SUCCESS_HOLD_STEPS` steps;
+    `info["success"]` is the task's condition at this step.
     """
 
     def __init__(
@@ -122,6 +129,7 @@ class DexEnv:
         self._episode = np.zeros(num_envs, dtype=np.int64)
         self._keys = np.zeros((num_envs, 3), dtype=np.int64)
         self.steps = torch.zeros(num_envs, dtype=torch.long, device=self.device)
+        self.success_steps = torch.zeros(num_envs, dtype=torch.long, device=self.device)
         self.last_action = self.home_action.repeat(num_envs, 1).float()
         self._history: Obs = {}
         self._was_reset = False
@@ -218,6 +226,7 @@ class DexEnv:
             initial[dev_ids] = self.view.body_pos(body)[dev_ids]
         self._was_reset = True
         self.steps[dev_ids] = 0
+        self.success_steps[dev_ids] = 0
         self.last_action[dev_ids] = self.home_action.float()
         return self._observe(reset_ids=dev_ids)
 
@@ -281,7 +290,8 @@ class DexEnv:
         self.task.update(self.view)
         success = self.task.success(self.view)
         reward = self.task.reward(self.view).float()
-        terminated = success.clone()
+        self.success_steps = torch.where(success, self.success_steps + 1, 0)
+        terminated = self.success_steps >= SUCCESS_HOLD_STEPS
         truncated = self.steps >= self.episode_steps
         info = {"success": success, "steps": self.steps.clone(),
                 "sim_warnings": self.sim.warning_counts()}
