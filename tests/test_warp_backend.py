@@ -89,10 +89,11 @@ def test_fields_are_zero_copy_views_and_subset_reset_keeps_others():
     before = qpos.clone()
     sim.reset(torch.tensor([1]))
     assert torch.equal(qpos[0], before[0])  # the same tensor sees the reset in place
-    np.testing.assert_allclose(qpos[1].numpy(), env.scene.model.qpos0, atol=1e-6)
+    np.testing.assert_allclose(qpos[1].cpu().numpy(), env.scene.model.qpos0, atol=1e-6)
     state = sim.get_state()
     sim.set_state(torch.tensor([1]), state[0:1])
-    np.testing.assert_allclose(sim.get_state()[1].numpy(), state[0].numpy(), atol=1e-6)
+    np.testing.assert_allclose(sim.get_state()[1].cpu().numpy(), state[0].cpu().numpy(),
+                               atol=1e-6)
 
 
 def test_per_world_model_field_changes_only_its_world():
@@ -103,7 +104,7 @@ def test_per_world_model_field_changes_only_its_world():
     mass[1, cube] *= 3.0
     env.sim.set_const([1])
     subtree = env.sim.model_field("body_subtreemass")
-    assert subtree[1, cube] == pytest.approx(3 * subtree[0, cube])
+    assert float(subtree[1, cube]) == pytest.approx(3 * float(subtree[0, cube]))
 
 
 def test_capacity_overflow_is_counted_per_world():

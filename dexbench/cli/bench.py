@@ -175,6 +175,10 @@ def format_table(result: dict) -> str:
             ("env physics steps/s", f"{result['env_physics_steps_per_s']:,.0f}"),
             ("raw physics steps/s", f"{result['raw_physics_steps_per_s']:,.0f}"),
             ("ratio env/raw", f"{result['ratio']:.3f}")]
+    if "ratio_without_contact" in result:
+        rows += [("env steps/s, no contact group",
+                  f"{result['env_steps_per_s_without_contact']:,.0f}"),
+                 ("ratio env/raw, no contact group", f"{result['ratio_without_contact']:.3f}")]
     if "camera_env_steps_per_s" in result:
         w, h = result["camera_resolution"]
         rows += [(f"+ 1 RGB-D {w}x{h} camera, envs", result["camera_num_envs"]),

@@ -5,7 +5,8 @@ validated, one CUDA graph of physics, success, reward, state observations).
 `raw_physics_steps_per_s` replays the same controls from the same start state through
 the env's own compiled model and data with plain `mujoco_warp.step` (graph captured,
 `decimation` steps per launch, controls written between launches), so the ratio
-isolates what the environment adds. With `camera_envs` > 0 the environment is timed
+isolates what the environment adds (also without the `contact` group, whose forces
+need one more constraint solve per step). With `camera_envs` > 0 the environment is timed
 again at that size with one RGB-D camera (`width` x `height`, ray traced on the GPU,
 images left on the GPU): every env step renders one image per env.
 """
@@ -109,7 +110,15 @@ def bench_sim_warp(cfg: DictConfig) -> dict:
         "ratio": round(env_sps * env.decimation / raw_sps, 4),
         "sim_warnings": int(sim.warning_counts().sum()),
     }
-    del env, sim, actions
+    del env, sim
+    # The contact group needs the acceleration stage at the new state (one more solve per
+    # control step); time the env without it too, to show what that stage costs.
+    kwargs.update(obs=[g for g in STATE_GROUPS if g != "contact"])
+    light = make_env(**kwargs)
+    light_sps = n * steps / _time_env(light, actions, steps, warmup, "env w/o contact")
+    result.update({"env_steps_per_s_without_contact": round(light_sps, 1),
+                   "ratio_without_contact": round(light_sps * light.decimation / raw_sps, 4)})
+    del light, actions
     camera_envs = int(cfg.camera_envs)
     if camera_envs > 0:
         kwargs.update(num_envs=camera_envs, obs=[*STATE_GROUPS, "rgb", "depth"],
