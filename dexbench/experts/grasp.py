@@ -50,7 +50,8 @@ class GraspPlan:
     pose instead of from above, `pitch` (rad) tilts the fingers down from the top grasp
     (90 deg: hanging, palm towards the object, to hook a handle). `yaw` is "box" (the
     object's face yaw nearest to the approach), "body" (the object's yaw) or "none",
-    turned further by `yaw_offset` (rad, or `yaw_offset(env) -> (N,)`).
+    turned further by `yaw_offset` (rad, or `yaw_offset(env) -> (N,)`). `settle` (s)
+    replaces `SETTLE_SECONDS`, the closed hand's wait before moving.
     After the grasp the object is lifted `lift` metres, or, with
     `target(env) -> (N, 3)`, carried until its `goal_point` (body frame) is there; with
     `release`, the hand then opens and backs off (placing), as it does whenever
@@ -72,6 +73,7 @@ class GraspPlan:
     release: bool = False
     let_go: Callable[[DexEnv], np.ndarray] | None = None
     carry_high: bool = True
+    settle: float | None = None
 
 
 def task_goal(env: DexEnv) -> np.ndarray:
@@ -88,7 +90,7 @@ TURN_RATE = 3.0  # rad/s
 ARRIVED = 0.008  # m: the actual palm this close to the grasp pose starts the closing
 PAUSE_SECONDS = 0.2  # still, open, at the grasp pose before closing
 CLOSE_SECONDS = 0.5
-SETTLE_SECONDS = 0.5
+SETTLE_SECONDS = 1.0  # closed and still before moving: lets weak fingers seat the object
 LOST_DISTANCE = 0.05  # held point this far from where the hand closed on it: retry
 PLACE_TOLERANCE = 0.006  # m: a placed object is let go within this of its target
 OPEN_SECONDS = 0.4
@@ -193,7 +195,8 @@ class GraspExpert:
         close = phase == Phase.CLOSE
         closing = np.clip((self.timer - PAUSE_SECONDS) / CLOSE_SECONDS, 0.0, 1.0)
         self.closure[close] = closing[close]
-        done = close & (self.timer > PAUSE_SECONDS + CLOSE_SECONDS + SETTLE_SECONDS)
+        settle = SETTLE_SECONDS if self.plan.settle is None else self.plan.settle
+        done = close & (self.timer > PAUSE_SECONDS + CLOSE_SECONDS + settle)
         self.lift_from[done] = self.pos[done]
         # Where the closed hand actually holds the object, in the hand frame.
         palm, palm_rot = self._palm()  # the actual hand: an arm may lag its command
