@@ -11,7 +11,8 @@ from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.experts.bimanual import TwoHandLiftExpert, TwoHandPlan
 from dexbench.experts.grasp import GraspExpert, GraspPlan, Phase, task_goal
-from dexbench.experts.insert import InsertExpert, InsertPlan, across_shaft
+from dexbench.experts.insert import InsertExpert, InsertPlan
+from dexbench.experts.motion import body_yaw, turnable_offset
 from dexbench.experts.press import PressExpert, PressPlan
 from dexbench.experts.sequence import SequenceExpert
 from dexbench.experts.turn import TurnExpert, TurnPlan
@@ -81,8 +82,16 @@ def _drawer_then_ball(env: DexEnv) -> Expert:
 
 
 DRAWER_OPEN = 0.95  # of its travel: well past the task's threshold before letting go
+
+
+def _hole_yaw(env: DexEnv):
+    return body_yaw(env.view.body_quat("hole").cpu().numpy())
+
+
+# Across the shaft, near the grip end: the hand's width leaves the head free to go in.
 PEG_GRASP = GraspPlan("peg", point=(-0.035, 0.0, 0.0), shift=(-0.005, 0.0, -0.005), yaw="body",
-                      yaw_offset=across_shaft("peg", "hole"), lift=0.1)
+                      yaw_offset=turnable_offset("peg", _hole_yaw, (math.pi / 2, -math.pi / 2)),
+                      lift=0.1, settle=0.5)
 
 
 def _grasp_then_insert(env: DexEnv) -> Expert:
@@ -91,16 +100,17 @@ def _grasp_then_insert(env: DexEnv) -> Expert:
     insert = InsertPlan("peg", peg.points["head"][1], peg.axes["shaft"][1], "hole",
                         hole.points["entrance"][1], hole.points["target"][1],
                         hole.axes["bore"][1])
-    grasp = GraspExpert(env, PEG_GRASP)
+    grasp, inserter = GraspExpert(env, PEG_GRASP), InsertExpert(env, insert)
     return SequenceExpert(env, [
         (grasp, lambda e: torch.as_tensor((grasp.phase == Phase.CARRY) & (
             e.task.lift(e.view, "peg").cpu().numpy() > PEG_RAISED))),
-        (InsertExpert(env, insert), lambda e: e.task.success(e.view))],
-        restart=lambda e: e.task.lift(e.view, "peg") < PEG_DROPPED)
+        (inserter, lambda e: e.task.success(e.view))],
+        restart=lambda e: (e.task.lift(e.view, "peg") < PEG_DROPPED) | torch.as_tensor(
+            inserter.stalled))
 
 
-PEG_RAISED = 0.05  # m: the held peg is clear of the table, the hand may turn it
-PEG_DROPPED = 0.015  # m: back on the table, it is grasped again
+PEG_RAISED = 0.03  # m: the held peg is clear of the table, the hand may turn it
+PEG_DROPPED = 0.015  # m: back on the table (or stalled lining up), it is grasped again
 SEQUENCES = {"OpenDrawer_RelocateSphere": _drawer_then_ball, "InsertPeg": _grasp_then_insert}
 
 

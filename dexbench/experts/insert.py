@@ -10,7 +10,6 @@ not make it pivot between the fingers.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,15 +17,18 @@ import torch
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand
-from dexbench.experts.motion import body_yaw, step_towards, turned
+from dexbench.experts.motion import step_towards, turned
 
 SPEED = 0.15  # m/s while lining up
 PUSH_SPEED = 0.04  # m/s into the bore
 TURN_RATE = 1.0  # rad/s
 STANDOFF = 0.03  # m in front of the entrance where the head lines up
-LINED_UP = 0.005  # m of head offset from the line-up point ...
-ALIGNED = np.radians(4.0)  # ... and shaft angle from the bore axis, before pushing
-JAMMED = np.radians(8.0)  # shaft angle while pushing: back out and line up again
+LINED_UP = 0.0025  # m of head offset from the line-up point ...
+ALIGNED = np.radians(2.5)  # ... and shaft angle from the bore axis, before pushing
+JAMMED = np.radians(8.0)  # shaft angle while pushing: back out and line up again ...
+STUCK_SECONDS = 1.5  # ... as when the head is not past the entrance after this long
+ENTERED = 0.005  # m past the entrance: the head is in the bore
+STALL_SECONDS = 4.0  # lining up this long without pushing: `stalled` (grasp it again)
 PUSH_PAST = 0.01  # m the push aims beyond the target (the bottom stops it)
 
 
@@ -55,6 +57,14 @@ class InsertExpert:
         self.pos = np.zeros((n, 3))
         self.rot = np.repeat(np.eye(3)[None], n, axis=0)
         self.pushing = np.zeros(n, dtype=bool)
+        self.push_time = np.zeros(n)
+        self.line_up_time = np.zeros(n)
+
+    @property
+    def stalled(self) -> np.ndarray:
+        """(N,) envs lining up for `STALL_SECONDS` without getting to push (a peg that
+        turned in the hand, a hand that cannot reach): worth a new grasp."""
+        return self.line_up_time > STALL_SECONDS
 
     def _palm_pose(self) -> tuple[np.ndarray, np.ndarray]:
         sim = self.env.sim
@@ -66,6 +76,8 @@ class InsertExpert:
         pos, rot = self._palm_pose()
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pushing[ids] = False
+        self.push_time[ids] = 0.0
+        self.line_up_time[ids] = 0.0
         self.adapter.reset(ids)
 
     def act(self) -> torch.Tensor:
@@ -79,7 +91,10 @@ class InsertExpert:
         angle = np.arccos(np.clip((shaft * inward).sum(axis=1), -1.0, 1.0))
         self.pushing |= ((np.linalg.norm(head - line_up, axis=1) < LINED_UP)
                          & (angle < ALIGNED))
-        self.pushing &= angle < JAMMED
+        self.push_time = np.where(self.pushing, self.push_time + self.env.control_dt, 0.0)
+        outside = ((head - entrance) * inward).sum(axis=1) < ENTERED
+        self.pushing &= (angle < JAMMED) & ~(outside & (self.push_time > STUCK_SECONDS))
+        self.line_up_time = np.where(self.pushing, 0.0, self.line_up_time + self.env.control_dt)
         goal = np.where(self.pushing[:, None], home, line_up)
         # The turn taking the shaft onto the bore axis, about the palm.
         axis = np.cross(shaft, inward)
@@ -94,20 +109,3 @@ class InsertExpert:
                                           TURN_RATE * self.env.control_dt)
         closure = np.ones(self.env.num_envs)
         return self.adapter.actions({self.side: HandCommand(self.pos, self.rot, closure)})
-
-
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return (angle + np.pi) % (2 * np.pi) - np.pi
-
-
-def across_shaft(peg: str, hole: str) -> Callable[[DexEnv], np.ndarray]:
-    """Grasp yaw offsets (N,) from the peg's yaw: fingers across the shaft, on the side
-    from which the hand's turn that lines the peg up with the hole's yaw crosses no
-    wrist limit (a floating wrist's yaw stays within +-pi)."""
-    def offset(env: DexEnv) -> np.ndarray:
-        view = env.view
-        peg_yaw = body_yaw(view.body_quat(peg).numpy())
-        turn = _wrap(body_yaw(view.body_quat(hole).numpy()) - peg_yaw)
-        hand = _wrap(peg_yaw + np.pi / 2)
-        return np.where(np.abs(hand + turn) < np.pi, np.pi / 2, -np.pi / 2)
-    return offset
