@@ -1,11 +1,10 @@
 """Shared fixtures: outputs go to a temp dir, never into the checkout."""
 
-import os
-
-# Headless rendering, decided before any test module imports mujoco.
-os.environ.setdefault("MUJOCO_GL", "egl")
-
+# Importing dexbench first picks headless rendering (EGL where it exists) before any test
+# module imports mujoco.
 import pytest
+
+import dexbench  # noqa: F401
 
 
 @pytest.fixture(autouse=True)
