@@ -89,7 +89,7 @@ def _hole_yaw(env: DexEnv):
 
 
 # Across the shaft, near the grip end: the hand's width leaves the head free to go in.
-PEG_GRASP = GraspPlan("peg", point=(-0.035, 0.0, 0.0), shift=(-0.005, 0.0, -0.005), yaw="body",
+PEG_GRASP = GraspPlan("peg", point=(-0.035, 0.0, 0.0), shift=(0.0, 0.0, -0.005), yaw="body",
                       yaw_offset=turnable_offset("peg", _hole_yaw, (math.pi / 2, -math.pi / 2)),
                       lift=0.1, settle=0.5)
 
