@@ -5,9 +5,11 @@ import numpy as np
 import pytest
 import torch
 
+from dexbench.assets.objects import T_SHAPE_RECTS
 from dexbench.experts import make_expert
 from dexbench.experts.adapter import ActionAdapter, HandCommand
 from dexbench.experts.motion import palm_down, turned
+from dexbench.experts.push import inside_rects, outline
 from dexbench.tasks.registry import make_env
 
 
@@ -84,3 +86,28 @@ def test_expert_for_a_task_without_one_names_those_that_exist():
     env = make_env("MakeCoffee", num_envs=1)
     with pytest.raises(ValueError, match=r"experts exist for .*PickCube"):
         make_expert(env)
+
+
+def test_push_expert_pushes_the_t_onto_its_goal():
+    env = make_env("PushT", "floating_shadow", num_envs=4, seed=PUSHT_SEED)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(4))
+    solved = torch.zeros(4, dtype=torch.bool)
+    for _ in range(env.episode_steps):
+        _, _, terminated, _, _ = env.step(expert.act())
+        solved |= terminated
+        if solved.sum() >= 2:
+            break
+    assert solved.sum() >= 2, f"PushT: expert solved {int(solved.sum())}/4"
+
+
+PUSHT_SEED = 2  # this seed's four episodes: three solved
+
+
+def test_push_candidates_sit_on_the_outline_and_push_inwards():
+    rects = np.array(T_SHAPE_RECTS)
+    points, pushes = outline(rects)
+    assert len(points) > 40
+    assert not inside_rects(points - 1e-3 * pushes, rects, 0.0).any()  # just outside
+    assert inside_rects(points + 1e-3 * pushes, rects, 0.0).all()  # just inside

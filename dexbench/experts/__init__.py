@@ -5,8 +5,10 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import torch
 
+from dexbench.assets.objects import T_SHAPE_RECTS, T_THICKNESS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.experts.bimanual import TwoHandLiftExpert, TwoHandPlan
@@ -14,6 +16,7 @@ from dexbench.experts.grasp import GraspExpert, GraspPlan, Phase, task_goal
 from dexbench.experts.insert import InsertExpert, InsertPlan
 from dexbench.experts.motion import body_yaw, turnable_offset
 from dexbench.experts.press import PressExpert, PressPlan
+from dexbench.experts.push import PushExpert, PushPlan
 from dexbench.experts.sequence import SequenceExpert
 from dexbench.experts.turn import TurnExpert, TurnPlan
 
@@ -114,6 +117,19 @@ PEG_DROPPED = 0.015  # m: back on the table (or stalled lining up), it is graspe
 SEQUENCES = {"OpenDrawer_RelocateSphere": _drawer_then_ball, "InsertPeg": _grasp_then_insert}
 
 
+def _goal_pose(env: DexEnv) -> np.ndarray:
+    """The sampled planar goal (x, y, yaw) of the pushed block's frame."""
+    return env.view.goal[:, :3].cpu().numpy()
+
+
+PUSHES: dict[str, PushPlan] = {
+    # Stop pushing (lift off and wait) well inside the 90% overlap success needs.
+    "PushT": PushPlan("tee", T_SHAPE_RECTS, 2 * T_THICKNESS, _goal_pose,
+                      lambda e: (e.task.overlap(e.view) >= PUSH_DONE_OVERLAP).cpu().numpy()),
+}
+PUSH_DONE_OVERLAP = 0.95
+
+
 TWO_HANDS: dict[str, TwoHandPlan] = {
     # Each hand hooks one short rim wall, fingers along the tray's long axis. Centred
     # between the fingers, the tray hangs ~5 deg low on the thumb side; with its centre
@@ -134,10 +150,13 @@ def make_expert(env: DexEnv) -> Expert:
         return PressExpert(env, PRESSES[name])
     if name in TURNS:
         return TurnExpert(env, TURNS[name])
+    if name in PUSHES:
+        return PushExpert(env, PUSHES[name])
     if name in TWO_HANDS:
         return TwoHandLiftExpert(env, TWO_HANDS[name])
     raise ValueError(f"no expert for task {name!r} yet; experts exist for "
-                     f"{', '.join(sorted({*PLANS, *PRESSES, *TURNS, *SEQUENCES, *TWO_HANDS}))}")
+                     f"{', '.join(sorted({*PLANS, *PRESSES, *TURNS, *SEQUENCES, *PUSHES,
+                                          *TWO_HANDS}))}")
 
 
 __all__ = ["Expert", "make_expert"]

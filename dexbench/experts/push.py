@@ -1,0 +1,304 @@
+"""Push a flat block to a planar goal pose with one fingertip, re-planning every push.
+
+For blocks too flat to grasp (PushT): the hand hangs its fingers down, turned so the
+row of fingertips lies along the push and the outermost fingertip leads, a point pusher
+just above the table. Each push is chosen greedily: over contact points on the block's
+outline (inward pushes) and push lengths, a quasi-static model (the block turns about its
+centroid by the push's moment over its radius of gyration squared) predicts the pose
+after the push; the push that most reduces the pose error per second (travel included)
+wins. The hand goes there over the block when the straight way would touch it, pushes,
+and plans again. Fingertips are measured on the hand itself, so the script serves every
+hand and mount.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
+
+SPEED = 0.4  # m/s in the air
+PUSH_SPEED = 0.25  # m/s while pushing
+TURN_RATE = 3.0  # rad/s
+TIP_RADIUS = 0.01  # m: a fingertip's half-width, the pusher's size
+LOW = 0.018  # m above the table: the leading fingertip while pushing
+CLEAR = 0.05  # m above the block's top: the fingertips while travelling over it
+STANDOFF = 0.02  # m between the fingertip and the outline before a push
+EDGE_STEP = 0.01  # m between candidate contact points along the outline
+CORNER_GAP = 0.012  # m: contact points keep this far from convex corners (and
+# 1.5 fingertip radii from concave ones, where the fingertip would not fit)
+PUSH_LENGTHS = np.array([0.004, 0.008, 0.015, 0.03, 0.06, 0.1])  # m past first contact
+YAW_WEIGHT = 0.06  # m of position error that weigh as much as 1 rad of yaw error
+NEAR = 0.025  # m: a next push starting this close to the fingertip needs no detour
+ARRIVED = 0.006  # m
+LEAD = 0.05  # m the pushing command runs ahead of the fingertip
+GIVE = 0.012  # m the fingertip lags its command while pushing the block
+PUSH_OVERHEAD = 0.15  # s every push costs beyond its length, for choosing pushes
+PUSH_SLACK = 0.3  # s a push may take beyond its length at PUSH_SPEED (a stuck push ends)
+LIFT_SECONDS = 0.4  # a detour's extra time (rise and descend), for choosing pushes
+BAN_SECONDS = 1.0
+ROW_TILT = 0.25  # rad the fingertip row tilts, leading fingertip down: the others clear
+MAX_YAW = 0.9 * np.pi  # a floating wrist's yaw joint stops at +-pi
+
+
+class Stage:
+    PLAN, RISE, OVER, DOWN, PUSH, DONE = range(6)
+
+
+@dataclass(frozen=True)
+class PushPlan:
+    """`body`: the pushed block; `rects`: its footprint as rectangles (cx, cy, hx, hy)
+    in its body frame, a union; `height`: its thickness; `goal(env) -> (N, 3)`: the
+    target (x, y, yaw) of its body frame; `done(env) -> (N,) bool`: close enough, the
+    hand lifts off and waits."""
+
+    body: str
+    rects: Sequence[tuple[float, float, float, float]]
+    height: float
+    goal: Callable[[DexEnv], np.ndarray]
+    done: Callable[[DexEnv], np.ndarray]
+
+
+def outline(rects: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate contacts of a union of rectangles: points (K, 2) on its outer outline
+    and inward push directions (K, 2), all in the body frame."""
+    points, pushes = [], []
+    for cx, cy, hx, hy in rects:
+        for normal, tangent, half, span in (((1, 0), (0, 1), hx, hy), ((-1, 0), (0, 1), hx, hy),
+                                            ((0, 1), (1, 0), hy, hx), ((0, -1), (1, 0), hy, hx)):
+            n, t = np.array(normal, float), np.array(tangent, float)
+            for s in np.arange(-span + CORNER_GAP, span - CORNER_GAP + 1e-9, EDGE_STEP):
+                p = np.array([cx, cy]) + half * n + s * t
+                clearance = p + n * (TIP_RADIUS + 1e-3)
+                if inside_rects(clearance[None], rects, 0.0)[0]:
+                    continue  # an inner edge, shared with the other rectangle
+                room = p + n * (TIP_RADIUS + STANDOFF)
+                if inside_rects(room[None], rects, 1.5 * TIP_RADIUS)[0]:
+                    continue  # a concave corner too tight for the fingertip
+                points.append(p)
+                pushes.append(-n)
+    return np.array(points), np.array(pushes)
+
+
+def inside_rects(pts: np.ndarray, rects: np.ndarray, margin: float) -> np.ndarray:
+    """(...,) whether points (..., 2) lie within `margin` of the union of rectangles."""
+    rel = np.abs(pts[..., None, :] - rects[:, :2])
+    return (rel <= rects[:, 2:] + margin).all(axis=-1).any(axis=-1)
+
+
+def _rot2(yaw: np.ndarray) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+class PushExpert:
+    """Greedy closed-loop pusher for the right hand of a single-hand env."""
+
+    def __init__(self, env: DexEnv, plan: PushPlan, side: str = "right") -> None:
+        self.env, self.plan, self.side = env, plan, side
+        self.adapter = ActionAdapter(env)
+        model = env.scene.model
+        layout = env.embodiment.sides[side]
+        self._palm = model.site(layout.palm_site).id
+        self._tips = [model.site(s).id for s in layout.fingertip_sites[1:]]  # no thumb
+        self.rects = np.asarray(plan.rects, dtype=float)
+        self.points, self.pushes = outline(self.rects)
+        areas = 4 * self.rects[:, 2] * self.rects[:, 3]
+        self.centroid = (areas[:, None] * self.rects[:, :2]).sum(0) / areas.sum()
+        second = areas * ((self.rects[:, 2] ** 2 + self.rects[:, 3] ** 2) / 3 + (
+            (self.rects[:, :2] - self.centroid) ** 2).sum(1))
+        self.gyration2 = second.sum() / areas.sum()  # m^2
+        hanging = palm_down(np.zeros(1)) @ pitch_down(np.pi / 2)
+        self._row_yaw = float(np.arctan2(hanging[0, 1, 1], hanging[0, 0, 1]))
+        n = env.num_envs
+        self.tip = np.zeros((n, 3))  # commanded leading fingertip (world)
+        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.yaw = np.zeros(n)
+        self.offsets = np.zeros((n, len(self._tips), 3))  # fingertips in the hand frame
+        self.lead = np.zeros(n, dtype=np.int64)
+        self.stage = np.full(n, Stage.PLAN)
+        self.start = np.zeros((n, 3))  # fingertip before the push (world)
+        self.direction = np.zeros((n, 3))
+        self.length = np.zeros(n)  # m the fingertip goes from `start` along the push
+        self.timer = np.zeros(n)  # s into the push
+        self.choice = np.zeros(n, dtype=np.int64)  # candidate contact being pushed
+        self.banned = np.zeros(n, dtype=np.int64)  # candidate whose push got stuck
+        self.ban_timer = np.zeros(n)
+        self.tilt = np.zeros(n)
+        self.drop = np.zeros(n)  # m the leading fingertip is above the lowest one
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        sim = self.env.sim
+        pos = sim.field("site_xpos").numpy()
+        rot = sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3)
+        palm = pos[ids, self._palm]
+        tips = pos[ids][:, self._tips] - palm[:, None]
+        self.offsets[ids] = np.einsum("nji,nkj->nki", rot[ids], tips)
+        self.rot[ids] = rot[ids]
+        self.lead[ids] = 0
+        self.tip[ids] = palm + np.einsum("nij,nj->ni", rot[ids], self.offsets[ids, 0])
+        self.yaw[ids] = 0.0
+        self.stage[ids] = Stage.PLAN
+        self.ban_timer[ids] = 0.0
+        self.adapter.reset(ids)
+
+    def act(self) -> torch.Tensor:
+        done = np.asarray(self.plan.done(self.env), dtype=bool)
+        self.stage[done] = Stage.DONE
+        self.stage[(self.stage == Stage.DONE) & ~done] = Stage.PLAN
+        planning = np.flatnonzero(self.stage == Stage.PLAN)
+        if len(planning):
+            self._plan(planning)
+        low = TABLE_TOP_Z + LOW
+        high = TABLE_TOP_Z + self.plan.height + CLEAR
+        target_rot = self._hanging(self.yaw, self.tilt)
+        # Turning about a low fingertip would sweep the other fingers over the table.
+        hold = (self.stage == Stage.RISE) & (self.tip[:, 2] < high - ARRIVED)
+        target_rot[hold] = self.rot[hold]
+        target = self.tip.copy()
+        speed = np.full(len(target), SPEED)
+        rise = self.stage == Stage.RISE
+        target[rise, 2] = high
+        over = self.stage == Stage.OVER
+        target[over] = self.start[over]
+        target[over, 2] = high
+        down = self.stage == Stage.DOWN
+        target[down] = self.start[down]
+        target[down, 2] = low + self.drop[down]
+        push = self.stage == Stage.PUSH
+        actual = self.env.sim.field("site_xpos").numpy()[:, self._tips][
+            np.arange(len(self.lead)), self.lead]
+        # The fingertip gives a little under load: the command runs ahead of it, a bit.
+        ahead = ((actual - self.start) * self.direction).sum(axis=1)
+        target[push] = self.start[push] + self.direction[push] * np.minimum(
+            ahead[push] + LEAD, self.length[push] + GIVE)[:, None]
+        target[push, 2] = low + self.drop[push]
+        speed[push] = PUSH_SPEED
+        self.timer[push] += self.env.control_dt
+        target[self.stage == Stage.DONE, 2] = high
+        turned = self._turn(self._hanging(self.yaw, self.tilt)) < 0.05
+        self.tip, self.rot = step_towards(self.tip, self.rot, target, target_rot,
+                                          (speed * self.env.control_dt)[:, None],
+                                          TURN_RATE * self.env.control_dt)
+        arrived = np.linalg.norm(self.tip - target, axis=1) < ARRIVED
+        self.stage[rise & arrived] = Stage.OVER
+        arrived &= turned
+        self.stage[over & arrived] = Stage.DOWN
+        self.stage[down & arrived] = Stage.PUSH
+        over_time = self.timer > self.length / PUSH_SPEED + PUSH_SLACK
+        ended = push & ((ahead >= self.length - ARRIVED) | over_time)
+        self.tip[ended] = actual[ended]
+        self.stage[ended] = Stage.PLAN
+        # A push that got nowhere is not tried again for a while.
+        stuck = ended & over_time & (ahead < self.length / 2)
+        self.banned[stuck] = self.choice[stuck]
+        self.ban_timer[stuck] = BAN_SECONDS
+        self.ban_timer -= self.env.control_dt
+        offset = self.offsets[np.arange(len(self.lead)), self.lead]
+        palm = self.tip - np.einsum("nij,nj->ni", self.rot, offset)
+        closure = np.zeros(self.env.num_envs)
+        return self.adapter.actions({self.side: HandCommand(palm, self.rot, closure)})
+
+    def _plan(self, ids: np.ndarray) -> None:
+        """Choose each env's next push: where, which way and how far."""
+        view = self.env.view
+        pos = view.body_pos(self.plan.body).numpy()[ids, :2]
+        yaw = body_yaw(view.body_quat(self.plan.body).numpy()[ids])
+        goal = np.asarray(self.plan.goal(self.env))[ids]
+        rot, goal_rot = _rot2(yaw), _rot2(goal[:, 2])
+        centre = pos + rot @ self.centroid
+        goal_centre = goal[:, :2] + goal_rot @ self.centroid
+        points = pos[:, None] + np.einsum("nij,kj->nki", rot, self.points)
+        pushes = np.einsum("nij,kj->nki", rot, self.pushes)
+        lever = points - centre[:, None]
+        moment = lever[..., 0] * pushes[..., 1] - lever[..., 1] * pushes[..., 0]
+        share = 1.0 / (1.0 + moment ** 2 / self.gyration2)  # of the push that translates
+        lengths = PUSH_LENGTHS[None, None]
+        moved = centre[:, None, None] + (share[..., None] * lengths)[..., None] * pushes[
+            :, :, None]
+        turned = yaw[:, None, None] + (share * moment / self.gyration2)[..., None] * lengths
+        cost_now = self._cost(centre, yaw, goal_centre, goal[:, 2])
+        cost = self._cost(moved, turned, goal_centre[:, None, None], goal[:, 2, None, None])
+        # A fingertip already behind the contact line pushes on from where it is.
+        behind = ((points - self.tip[ids, None, :2]) * pushes).sum(-1) - TIP_RADIUS
+        gap = np.where(behind >= 0.0, np.minimum(behind, STANDOFF), STANDOFF)
+        start = points - pushes * (TIP_RADIUS + gap)[..., None]
+        travel = np.linalg.norm(start - self.tip[ids, None, :2], axis=-1)
+        gap = np.where(travel < NEAR, gap, STANDOFF)
+        start = points - pushes * (TIP_RADIUS + gap)[..., None]
+        travel = np.linalg.norm(start - self.tip[ids, None, :2], axis=-1)
+        detour = np.where(travel < NEAR, 0.0, LIFT_SECONDS)
+        seconds = (travel + detour)[..., None] / SPEED + (
+            gap[..., None] + lengths + GIVE) / PUSH_SPEED + PUSH_OVERHEAD
+        gain = (np.sqrt(cost_now)[:, None, None] - np.sqrt(cost)) / seconds
+        banned = self.ban_timer[ids] > 0
+        gain[np.flatnonzero(banned), self.banned[ids][banned]] = -np.inf
+        best = gain.reshape(len(ids), -1).argmax(axis=1)
+        k, m = np.unravel_index(best, gain.shape[1:])
+        rows = np.arange(len(ids))
+        d = pushes[rows, k]
+        self.choice[ids] = k
+        self.start[ids, :2] = start[rows, k]
+        self.direction[ids] = np.column_stack([d, np.zeros(len(ids))])
+        self.length[ids] = gap[rows, k] + PUSH_LENGTHS[m]
+        self.timer[ids] = 0.0
+        self._face(ids, d)
+        clear = travel[rows, k] < NEAR
+        self.stage[ids] = np.where(clear, Stage.DOWN, Stage.RISE)
+
+    def _cost(self, centre: np.ndarray, yaw: np.ndarray, goal_centre: np.ndarray,
+              goal_yaw: np.ndarray) -> np.ndarray:
+        """Squared pose error (m^2), yaw weighed by YAW_WEIGHT."""
+        return ((centre - goal_centre) ** 2).sum(-1) + (YAW_WEIGHT * wrap(yaw - goal_yaw)) ** 2
+
+    def _face(self, ids: np.ndarray, d: np.ndarray) -> None:
+        """Turn the fingertip row along pushes `d` (n, 2), the nearer of its two yaws;
+        the fingertip ahead along the push leads."""
+        along = np.arctan2(d[:, 1], d[:, 0]) - self._row_yaw
+        options = np.stack([wrap(along), wrap(along + np.pi)], axis=1)
+        far = np.abs(wrap(options - self.yaw[ids, None]))
+        far[np.abs(options) > MAX_YAW] = np.inf
+        self.yaw[ids] = options[np.arange(len(ids)), far.argmin(axis=1)]
+        push = np.column_stack([d, np.zeros(len(ids))])
+        rows = np.arange(len(ids))
+        best = None
+        for tilt in (ROW_TILT, -ROW_TILT):
+            tips = np.einsum("nij,nkj->nki", self._hanging(self.yaw[ids], np.full(len(ids), tilt)),
+                             self.offsets[ids])
+            lead = (tips @ push[:, :, None])[..., 0].argmax(axis=1)
+            drop = tips[rows, lead, 2] - tips[..., 2].min(axis=1)
+            if best is None:
+                best = (np.full(len(ids), tilt), lead, drop)
+            else:
+                better = drop < best[2]
+                best = tuple(np.where(better, new, old) for new, old in zip(
+                    (np.full(len(ids), tilt), lead, drop), best, strict=True))
+        tilt, lead, self.drop[ids] = best
+        self.tilt[ids] = tilt
+        palm = self.tip[ids] - np.einsum("nij,nj->ni", self.rot[ids],
+                                         self.offsets[ids, self.lead[ids]])
+        self.lead[ids] = lead
+        self.tip[ids] = palm + np.einsum("nij,nj->ni", self.rot[ids],
+                                         self.offsets[ids, lead])
+
+    @staticmethod
+    def _hanging(yaw: np.ndarray, tilt: np.ndarray) -> np.ndarray:
+        """(N, 3, 3) hand frames, fingers down, turned `yaw` about world z and the
+        fingertip row tilted `tilt` (rad) about the palm normal."""
+        c, s = np.cos(tilt), np.sin(tilt)
+        roll = np.zeros((len(tilt), 3, 3))
+        roll[:, 0, 0], roll[:, 0, 1], roll[:, 1, 0], roll[:, 1, 1], roll[:, 2, 2] = c, -s, s, c, 1
+        return palm_down(yaw) @ pitch_down(np.pi / 2) @ roll
+
+    def _turn(self, target_rot: np.ndarray) -> np.ndarray:
+        """Angle (rad) still to turn from the commanded to the target orientation."""
+        cos = (np.einsum("nij,nij->n", self.rot, target_rot) - 1) / 2
+        return np.arccos(np.clip(cos, -1.0, 1.0))
