@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import os
+import re
 
 import mujoco
 import numpy as np
@@ -106,6 +107,22 @@ def test_synergies_differ(hand: str) -> None:
     for i, a in enumerate(SYNERGIES):
         for b in SYNERGIES[i + 1:]:
             assert np.abs(poses[a] - poses[b]).max() > 0.2, f"{a} and {b} barely differ"
+
+
+# The thumb's actuators of each hand, by name: `hook` must find exactly these itself.
+THUMB_ACTUATORS = {"shadow": r"A_TH", "allegro": r"/tha\d", "leap": r"/th_",
+                   "sharpa": r"thumb", "inspire": r"thumb", "wuji": r"finger1_"}
+
+
+@pytest.mark.parametrize("hand", list(HANDS))
+def test_hook_curls_the_fingers_and_leaves_the_thumb_open(hand: str) -> None:
+    _, emb = _scene(f"floating_{hand}")
+    is_hand = np.array(["/hand/" in a for a in emb.actuators])
+    thumb = np.array([re.search(THUMB_ACTUATORS[hand], a) is not None for a in emb.actuators])
+    assert thumb.any()
+    hook, opened, power = (emb.poses[s] for s in ("hook", "open", "power"))
+    np.testing.assert_array_equal(hook[is_hand & thumb], opened[is_hand & thumb])
+    np.testing.assert_array_equal(hook[is_hand & ~thumb], power[is_hand & ~thumb])
 
 
 @pytest.mark.parametrize("name", ARM_NAMES)

@@ -25,7 +25,10 @@ _MAX_SETTLE_STEPS = 2000  # 4 s at the 2 ms timestep used here
 
 @dataclass(frozen=True)
 class HandGeometry:
-    """Hand-frame pose, fingertip points and synergy targets of one hand side."""
+    """Hand-frame pose, fingertip points and synergy targets of one hand side.
+
+    Besides each hand's declared synergies, every hand gets `hook`: `power` on the
+    fingers, `open` on the thumb (derived, not declared)."""
 
     frame_pos: np.ndarray  # (3,) origin of H in the hand file's world frame
     frame_rot: np.ndarray  # (3, 3) columns: H's x (fingers), y, z (palm normal)
@@ -90,11 +93,14 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
     zero = np.zeros(model.nu)
     open_ = synergy_targets(hand.synergies.get("open", {}), names, ranges, zero)
     synergies = {
-        s: synergy_targets(hand.synergies.get(s, {}), names, ranges, open_) for s in SYNERGIES
+        s: synergy_targets(hand.synergies.get(s, {}), names, ranges, open_)
+        for s in SYNERGIES if s != "hook"
     }
 
     palm = model.body(parts.palm_body).id
     tips = [model.body(b).id for b in parts.fingertip_bodies]
+    thumb = thumb_actuators(model, palm, tips[0])
+    synergies["hook"] = np.where(thumb, synergies["open"], synergies["power"])
     _settle(model, data, synergies["open"])
     open_qpos = {
         model.joint(j).name: float(data.qpos[model.jnt_qposadr[j]]) for j in range(model.njnt)
@@ -129,6 +135,31 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
         synergies=synergies,
         open_qpos=open_qpos,
     )
+
+
+def thumb_actuators(model: mujoco.MjModel, palm: int, thumb_tip: int) -> np.ndarray:
+    """(nu,) bool: the actuators driving a joint on the chain from `palm` to `thumb_tip`
+    (directly or through a tendon): `hook` keeps these open, so the thumb stays clear of
+    what the curled fingers hold (a mug's rim)."""
+    chain = set()
+    body = thumb_tip
+    while body not in (palm, 0):
+        chain.add(body)
+        body = model.body_parentid[body]
+    out = np.zeros(model.nu, dtype=bool)
+    for a in range(model.nu):
+        target = model.actuator_trnid[a, 0]
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+            joints = [target]
+        elif model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON:
+            first = model.tendon_adr[target]
+            wraps = range(first, first + model.tendon_num[target])
+            joints = [model.wrap_objid[w] for w in wraps
+                      if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT]
+        else:
+            joints = []
+        out[a] = any(model.jnt_bodyid[j] in chain for j in joints)
+    return out
 
 
 def _knuckle(model: mujoco.MjModel, body: int, palm: int) -> int:

@@ -276,4 +276,5 @@ HANDS: dict[str, HandSpec] = {
     ),
 }
 
-SYNERGIES = ("open", "power", "pinch")
+# `hook` is derived for every hand (power fingers, open thumb), not declared in HandSpec.
+SYNERGIES = ("open", "power", "pinch", "hook")
