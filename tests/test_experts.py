@@ -102,7 +102,7 @@ def test_push_expert_pushes_the_t_onto_its_goal():
     assert solved.sum() >= 2, f"PushT: expert solved {int(solved.sum())}/4"
 
 
-PUSHT_SEED = 2  # this seed's four episodes: three solved
+PUSHT_SEED = 2  # over many seeds ~88% succeed (collect: 50/57); this seed solves 4/4
 
 
 def test_push_candidates_sit_on_the_outline_and_push_inwards():

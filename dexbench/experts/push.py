@@ -26,6 +26,8 @@ from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_toward
 
 SPEED = 0.4  # m/s in the air
 PUSH_SPEED = 0.25  # m/s while pushing
+MIN_PUSH_SPEED = 0.04  # m/s at the end of a push
+SLOW_DOWN = 0.15  # s: push speed is the push still to go over this
 TURN_RATE = 3.0  # rad/s
 TIP_RADIUS = 0.01  # m: a fingertip's half-width, the pusher's size
 LOW = 0.018  # m above the table: the leading fingertip while pushing
@@ -35,20 +37,23 @@ EDGE_STEP = 0.01  # m between candidate contact points along the outline
 CORNER_GAP = 0.012  # m: contact points keep this far from convex corners (and
 # 1.5 fingertip radii from concave ones, where the fingertip would not fit)
 PUSH_LENGTHS = np.array([0.004, 0.008, 0.015, 0.03, 0.06, 0.1])  # m past first contact
-YAW_WEIGHT = 0.06  # m of position error that weigh as much as 1 rad of yaw error
+YAW_WEIGHT = 0.12  # m of position error that weigh as much as 1 rad of yaw error
 NEAR = 0.025  # m: a next push starting this close to the fingertip needs no detour
-ARRIVED = 0.006  # m
+ARRIVED = 0.006  # m: the commanded fingertip this close to a waypoint moves on
+PUSH_DONE = 0.002  # m short of its length, a push has been made
 LEAD = 0.05  # m the pushing command runs ahead of the fingertip
 GIVE = 0.012  # m the fingertip lags its command while pushing the block
 PUSH_OVERHEAD = 0.15  # s every push costs beyond its length, for choosing pushes
 PUSH_SLACK = 0.3  # s a push may take beyond its length at PUSH_SPEED (a stuck push ends)
-LIFT_SECONDS = 0.4  # a detour's extra time (rise and descend), for choosing pushes
-BAN_SECONDS = 1.0
+LIFT_DETOUR = 0.4  # m of extra travel a detour over the block counts as (rise, descend)
+BAN_SECONDS = 1.0  # a stuck push's contact is left out of the choice this long
 ROW_TILT = 0.25  # rad the fingertip row tilts, leading fingertip down: the others clear
 MAX_YAW = 0.9 * np.pi  # a floating wrist's yaw joint stops at +-pi
 
 
 class Stage:
+    """Each env's step in its push: plan, rise, over to the start, down, push; done."""
+
     PLAN, RISE, OVER, DOWN, PUSH, DONE = range(6)
 
 
@@ -181,7 +186,8 @@ class PushExpert:
         target[push] = self.start[push] + self.direction[push] * np.minimum(
             ahead[push] + LEAD, self.length[push] + GIVE)[:, None]
         target[push, 2] = low + self.drop[push]
-        speed[push] = PUSH_SPEED
+        # Slowing down towards the push's end: the block stops where planned.
+        speed[push] = np.clip((self.length - ahead)[push] / SLOW_DOWN, MIN_PUSH_SPEED, PUSH_SPEED)
         self.timer[push] += self.env.control_dt
         target[self.stage == Stage.DONE, 2] = high
         turned = self._turn(self._hanging(self.yaw, self.tilt)) < 0.05
@@ -194,7 +200,7 @@ class PushExpert:
         self.stage[over & arrived] = Stage.DOWN
         self.stage[down & arrived] = Stage.PUSH
         over_time = self.timer > self.length / PUSH_SPEED + PUSH_SLACK
-        ended = push & ((ahead >= self.length - ARRIVED) | over_time)
+        ended = push & ((ahead >= self.length - PUSH_DONE) | over_time)
         self.tip[ended] = actual[ended]
         self.stage[ended] = Stage.PLAN
         # A push that got nowhere is not tried again for a while.
@@ -235,7 +241,7 @@ class PushExpert:
         gap = np.where(travel < NEAR, gap, STANDOFF)
         start = points - pushes * (TIP_RADIUS + gap)[..., None]
         travel = np.linalg.norm(start - self.tip[ids, None, :2], axis=-1)
-        detour = np.where(travel < NEAR, 0.0, LIFT_SECONDS)
+        detour = np.where(travel < NEAR, 0.0, LIFT_DETOUR)
         seconds = (travel + detour)[..., None] / SPEED + (
             gap[..., None] + lengths + GIVE) / PUSH_SPEED + PUSH_OVERHEAD
         gain = (np.sqrt(cost_now)[:, None, None] - np.sqrt(cost)) / seconds
