@@ -254,19 +254,20 @@ HANDS: dict[str, HandSpec] = {
     ),
     "wuji": HandSpec(
         name="wuji",
-        grasp_offset=(0.114, -0.01, 0.044),
+        grasp_offset=(0.105, -0.022, 0.03),
         collection="wuji_hand",
         sides={"right": _wuji_side("right"), "left": _wuji_side("left")},
         synergies={
             "open": {},
-            # A hook grasp: little knuckle flexion, strongly curled distal joints, so the
-            # weak fingers (forcerange ~0.2-0.6 Nm) press with short lever arms.
+            # A hook grasp: some knuckle flexion, strongly curled distal joints, so the
+            # weak fingers (forcerange ~0.2-0.6 Nm) press with short lever arms. Values
+            # (and the offset) searched like Allegro's, on the floating and xArm7 mounts.
             "power": {
-                r"finger[2-5]_joint1_actuator$": 0.29,
-                r"finger[2-5]_joint[34]_actuator$": 1.2,
-                r"finger1_joint1_actuator$": 1.6,
-                r"finger1_joint2_actuator$": 0.61,
-                r"finger1_joint[34]_actuator$": 1.56,
+                r"finger[2-5]_joint1_actuator$": 0.535,
+                r"finger[2-5]_joint[34]_actuator$": 2.002,
+                r"finger1_joint1_actuator$": 1.742,
+                r"finger1_joint2_actuator$": 1.707,
+                r"finger1_joint[34]_actuator$": 2.06,
             },
             "pinch": {
                 r"finger2_joint1_actuator$": 0.9,
