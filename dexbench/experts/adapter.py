@@ -35,6 +35,14 @@ class HandCommand:
     synergy: str = "power"
 
 
+def palm_and_finger_sites(env: DexEnv, side: str) -> tuple[int, list[int]]:
+    """Site ids of a hand's palm and of its fingertips without the thumb (listed first)."""
+    model = env.scene.model
+    layout = env.embodiment.sides[side]
+    return (model.site(layout.palm_site).id,
+            [model.site(s).id for s in layout.fingertip_sites[1:]])
+
+
 class ActionAdapter:
     """Solves mount IK per env (warm-started from the last solution) and blends fingers."""
 

@@ -21,7 +21,7 @@ import torch
 
 from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.adapter import ActionAdapter, HandCommand, palm_and_finger_sites
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
 
 SPEED = 0.4  # m/s in the air
@@ -109,10 +109,7 @@ class PushExpert:
     def __init__(self, env: DexEnv, plan: PushPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
-        model = env.scene.model
-        layout = env.embodiment.sides[side]
-        self._palm = model.site(layout.palm_site).id
-        self._tips = [model.site(s).id for s in layout.fingertip_sites[1:]]  # no thumb
+        self._palm, self._tips = palm_and_finger_sites(env, side)
         self.rects = np.asarray(plan.rects, dtype=float)
         self.points, self.pushes = outline(self.rects)
         areas = 4 * self.rects[:, 2] * self.rects[:, 3]

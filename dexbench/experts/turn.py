@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.adapter import ActionAdapter, HandCommand, palm_and_finger_sites
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 
 SPEED = 0.4  # m/s in the air
@@ -49,9 +49,7 @@ class TurnExpert:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
         model = env.scene.model
-        layout = env.embodiment.sides[side]
-        self._palm = model.site(layout.palm_site).id
-        self._tips = [model.site(s).id for s in layout.fingertip_sites[1:]]  # no thumb
+        self._palm, self._tips = palm_and_finger_sites(env, side)
         self._hinge_body = model.body(model.joint(plan.hinge).bodyid[0]).name
         self._hinge_axis = tuple(model.joint(plan.hinge).axis)
         n = env.num_envs

@@ -42,6 +42,14 @@ def state_columns(model: mujoco.MjModel, spec: int) -> torch.Tensor:
                       for name in state_layout(model, spec)])
 
 
+def lookup_field(fields: dict[str, torch.Tensor], name: str) -> torch.Tensor:
+    """A backend's field by name, or an error listing the fields it has."""
+    try:
+        return fields[name]
+    except KeyError:
+        raise KeyError(f"unknown field {name!r}; have {sorted(fields)}") from None
+
+
 class SimBackend(Protocol):
     """N worlds of one compiled model."""
 

@@ -17,7 +17,13 @@ import mujoco.batch
 import numpy as np
 import torch
 
-from dexbench.sim.backend import DERIVED_FIELDS, INTEGRATION, STATE_FIELDS, state_columns
+from dexbench.sim.backend import (
+    DERIVED_FIELDS,
+    INTEGRATION,
+    STATE_FIELDS,
+    lookup_field,
+    state_columns,
+)
 
 _VEL = mujoco.mjtStage.mjSTAGE_VEL.value
 _ACC = mujoco.mjtStage.mjSTAGE_ACC.value
@@ -53,10 +59,7 @@ class CpuBackend:
         return self.batch.nthread
 
     def field(self, name: str) -> torch.Tensor:
-        try:
-            return self._fields[name]
-        except KeyError:
-            raise KeyError(f"unknown field {name!r}; have {sorted(self._fields)}") from None
+        return lookup_field(self._fields, name)
 
     def model_field(self, name: str) -> torch.Tensor:
         """A writable (num_envs, ...) view of per-world values of a model field."""

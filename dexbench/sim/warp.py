@@ -28,7 +28,7 @@ import mujoco
 import numpy as np
 import torch
 
-from dexbench.sim.backend import DERIVED_FIELDS, INTEGRATION, STATE_FIELDS
+from dexbench.sim.backend import DERIVED_FIELDS, INTEGRATION, STATE_FIELDS, lookup_field
 from dexbench.sim.warp_render import _import_warp, default_warp_device
 
 wp, mjw = _import_warp()
@@ -131,10 +131,7 @@ class WarpBackend:
         return tensor
 
     def field(self, name: str) -> torch.Tensor:
-        try:
-            return self._fields[name]
-        except KeyError:
-            raise KeyError(f"unknown field {name!r}; have {sorted(self._fields)}") from None
+        return lookup_field(self._fields, name)
 
     def model_field(self, name: str) -> torch.Tensor:
         """A writable (num_envs, ...) view of per-world values of a model field.

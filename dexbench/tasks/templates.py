@@ -188,11 +188,11 @@ class LiftTask(TabletopTask):
         return tilt_deg(view.axis(*self.objects[self.lifted].axes["up"])) <= self.max_tilt
 
     def success(self, view: SceneView) -> torch.Tensor:
-        obj = self.objects[self.lifted]
-        slow = torch.ones_like(self._upright(view))
-        if obj.free_joint is not None:
-            slow = view.free_joint_vel(obj.free_joint)[:, :3].norm(dim=1) < self.max_speed
-        return (self.lift(view, self.lifted) >= self.lift_threshold) & self._upright(view) & slow
+        ok = (self.lift(view, self.lifted) >= self.lift_threshold) & self._upright(view)
+        joint = self.objects[self.lifted].free_joint
+        if joint is not None:
+            ok &= view.free_joint_vel(joint)[:, :3].norm(dim=1) < self.max_speed
+        return ok
 
     def progress(self, view: SceneView) -> torch.Tensor:
         upright = self._upright(view).to(torch.float64)
