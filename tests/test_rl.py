@@ -44,6 +44,27 @@ def test_vec_env_observations_rewards_and_time_outs(vec):
     assert vec.curve.points[-1]["episodes"] == 3  # one iteration of two steps closed
 
 
+def test_training_episodes_outlast_success_and_count_it(vec, monkeypatch):
+    env = vec.env
+    real_step = env.step
+
+    def success_in_env_0(actions):
+        obs, reward, terminated, truncated, info = real_step(actions)
+        terminated[0] = env.steps[0] == 1
+        return obs, reward, terminated, truncated, info
+
+    monkeypatch.setattr(env, "step", success_in_env_0)
+    short = RslVecEnv(env, 0.05, RewardWeights(), steps_per_iteration=2, episode_steps=2)
+    zero = torch.zeros(3, short.num_actions)
+    _, _, dones, _ = short.step(zero)
+    assert dones.tolist() == [0, 0, 0]  # success does not end a training episode
+    _, _, dones, extras = short.step(zero)
+    assert dones.tolist() == [1, 1, 1] and extras["time_outs"].all()
+    assert short.curve.points[-1]["success_rate"] == pytest.approx(1 / 3)
+    with pytest.raises(ValueError, match="episode_steps"):
+        RslVecEnv(env, 0.05, RewardWeights(), 2, episode_steps=env.episode_steps + 1)
+
+
 def test_lift_tasks_get_the_grasp_term(vec):
     _, terms = RewardTerms(vec.env, RewardWeights())(
         torch.zeros(3), vec.env.reset(), torch.zeros(3, vec.num_actions),

@@ -46,6 +46,18 @@ def build_env(cfg: DictConfig) -> DexEnv:
     return make_env(**kwargs)
 
 
+def episode_steps(cfg: DictConfig, env: DexEnv) -> int | None:
+    """Control steps of a training episode (`rl.episode_seconds`; null: the task's)."""
+    seconds = cfg.rl.episode_seconds
+    if seconds is None:
+        return None
+    steps = round(float(seconds) / env.control_dt)
+    if not 0 < steps <= env.episode_steps:
+        raise ConfigError(f"rl.episode_seconds={seconds} must be in (0, "
+                          f"{env.task.episode_seconds}] (the task's time limit)")
+    return steps
+
+
 def _meta(cfg: DictConfig, env: DexEnv, vec: RslVecEnv) -> dict:
     obs = vec.get_observations()
     return {"task": env.task.name, "embodiment": env.embodiment.name,
@@ -66,7 +78,8 @@ def train(overrides: list[str]) -> dict:
     env = build_env(cfg)
     run_dir = new_run_dir("rl", f"{env.task.name}-{env.embodiment.name}", cfg)
     vec = RslVecEnv(env, float(rl.action_scale), RewardWeights(**rl.rewards),
-                    int(rl.num_steps_per_env), cfg=OmegaConf.to_container(cfg, resolve=True))
+                    int(rl.num_steps_per_env), episode_steps(cfg, env),
+                    cfg=OmegaConf.to_container(cfg, resolve=True))
     write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")
     # RSL-RL's per-iteration console report goes to a file; the console shows a bar.
     runner_log = open(run_dir / "rsl_rl.log", "w")  # noqa: SIM115  (closed below)

@@ -5,9 +5,13 @@ Actions are deltas of the joint targets: the policy's output a (N, A), clipped t
 from the targets applied last (the env's `policy` observation group, the home pose after
 a reset), so exploration noise makes a random walk rather than jumps across the range.
 The actor sees the state observation groups, the critic those plus `privileged`.
-Finished environments reset inside `step`; `time_outs` tells RSL-RL which were cut by
-the time limit (so their value is bootstrapped). Per-iteration success and reward go to
-`curve` (success vs wall time).
+Training episodes last `episode_steps` control steps and do not end at success: ending
+them there would make success cost the positive reward of every later step, so PPO would
+learn to hover just short of it; the policy instead learns to reach success and hold it.
+An episode counts as solved when the env's success (the condition held for
+`SUCCESS_HOLD_STEPS`) occurred in it, as in the evaluator. Environments reset inside `step`
+at the time limit, which RSL-RL bootstraps (`time_outs`). Per-iteration success and reward
+go to `curve` (success vs wall time).
 """
 
 from __future__ import annotations
@@ -71,13 +75,17 @@ class RslVecEnv(VecEnv):
     """A `DexEnv` (built with `auto_reset=False` and the actor + critic groups) for RSL-RL."""
 
     def __init__(self, env: DexEnv, action_scale: float, weights: RewardWeights,
-                 steps_per_iteration: int, cfg: dict | None = None) -> None:
+                 steps_per_iteration: int, episode_steps: int | None = None,
+                 cfg: dict | None = None) -> None:
         if env.auto_reset:
             raise ValueError("build the env with auto_reset=False: RslVecEnv resets it")
         self.env = env
         self.num_envs = env.num_envs
         self.num_actions = env.action_dim
-        self.max_episode_length = env.episode_steps
+        self.max_episode_length = episode_steps or env.episode_steps
+        if not 0 < self.max_episode_length <= env.episode_steps:
+            raise ValueError(f"episode_steps must be in 1..{env.episode_steps} (the task's "
+                             f"time limit), got {episode_steps}")
         self.device = env.device
         self.cfg = cfg or {}
         self.action_scale = action_scale
@@ -88,6 +96,7 @@ class RslVecEnv(VecEnv):
         self._steps_per_iteration = steps_per_iteration
         self._total_steps = 0
         self._prev_action = torch.zeros(env.num_envs, env.action_dim, device=env.device)
+        self._solved = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
         self._obs = env.reset()
         self.curve = Curve()
 
@@ -115,20 +124,22 @@ class RslVecEnv(VecEnv):
         action = actions.to(self.device).clamp(-1.0, 1.0)
         targets = delta_targets(env.last_action, action, env.action_low, env.action_high,
                                 self.action_scale)
-        obs, task_reward, terminated, truncated, info = env.step(targets)
+        obs, task_reward, terminated, _, info = env.step(targets)
         reward, terms = self.rewards(task_reward, obs, action, self._prev_action)
-        done = terminated | truncated
+        self._solved |= terminated
+        done = env.steps >= self.max_episode_length
+        self.curve.add(done, self._solved, reward)
         self._prev_action = action.clone()
         ids = done.nonzero().flatten()
         if len(ids):
             obs = env.reset(ids)
             self._prev_action[ids] = 0.0
+            self._solved[ids] = False
         self._obs = obs
-        self.curve.add(done, info["success"], reward)
         self._total_steps += 1
         if self._total_steps % self._steps_per_iteration == 0:
             self.curve.close_iteration(self._total_steps * self.num_envs)
         log = {f"/reward/{k}": v.mean() for k, v in terms.items()}
         log["/sim_warnings"] = info["sim_warnings"].float().mean()
-        extras = {"time_outs": truncated & ~terminated, "log": log}
+        extras = {"time_outs": done, "log": log}
         return self._pack(obs), reward, done.long(), extras
