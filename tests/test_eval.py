@@ -97,6 +97,7 @@ def test_tables_chart_and_merge_on_synthetic_results(tmp_path):
     with pytest.raises(MergeError, match=r"no results\.json"):
         merge_runs([tmp_path])
     assert merge([str(tmp_path / "a"), str(tmp_path / "b"), f"out={tmp_path / 'cli'}"]) == 0
+    assert merge(["--help"]) == 0 and merge([]) == 2  # usage, nothing written
     rows = list(csv.reader((tmp_path / "cli/merged.csv").open()))
     assert rows[0] == ["category", "task", "dp", "dp3"] and rows[-1][:2] == ["all", "mean"]
     with pytest.raises(ConfigError, match="no results"):

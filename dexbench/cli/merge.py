@@ -15,6 +15,9 @@ USAGE = "usage: python -m dexbench merge <eval run folder> ... [out=<folder>]"
 
 
 def merge(argv: list[str]) -> int:
+    if not argv or {"-h", "--help"} & set(argv):
+        print(__doc__)
+        return 0 if argv else 2
     options = dict(a.split("=", 1) for a in argv if "=" in a)
     unknown = sorted(set(options) - {"out"})
     if unknown:
