@@ -9,8 +9,9 @@ import torch
 from dexbench.cli.config import load_config
 from dexbench.cli.rl import build_env, train
 from dexbench.policies import rl as rl_policy
+from dexbench.rl.actions import ActionMap, delta_targets
 from dexbench.rl.rewards import RewardTerms, RewardWeights
-from dexbench.rl.vec_env import RslVecEnv, delta_targets
+from dexbench.rl.vec_env import RslVecEnv
 from dexbench.tasks.registry import make_env
 
 
@@ -25,7 +26,7 @@ def test_delta_targets_scale_by_half_range_and_clip():
 def vec():
     cfg = load_config("rl", ["sim.backend=cpu", "num_envs=3", "sim.nthread=1"])
     env = build_env(cfg)
-    return RslVecEnv(env, 0.05, RewardWeights(), steps_per_iteration=2)
+    return RslVecEnv(env, ActionMap(env, "joints", 0.05), RewardWeights(), steps_per_iteration=2)
 
 
 def test_vec_env_observations_rewards_and_time_outs(vec):
@@ -54,7 +55,8 @@ def test_training_episodes_outlast_success_and_count_it(vec, monkeypatch):
         return obs, reward, terminated, truncated, info
 
     monkeypatch.setattr(env, "step", success_in_env_0)
-    short = RslVecEnv(env, 0.05, RewardWeights(), steps_per_iteration=2, episode_steps=2)
+    short = RslVecEnv(env, vec.action_map, RewardWeights(), steps_per_iteration=2,
+                      episode_steps=2)
     zero = torch.zeros(3, short.num_actions)
     _, _, dones, _ = short.step(zero)
     assert dones.tolist() == [0, 0, 0]  # success does not end a training episode
@@ -62,7 +64,32 @@ def test_training_episodes_outlast_success_and_count_it(vec, monkeypatch):
     assert dones.tolist() == [1, 1, 1] and extras["time_outs"].all()
     assert short.curve.points[-1]["success_rate"] == pytest.approx(1 / 3)
     with pytest.raises(ValueError, match="episode_steps"):
-        RslVecEnv(env, 0.05, RewardWeights(), 2, episode_steps=env.episode_steps + 1)
+        RslVecEnv(env, vec.action_map, RewardWeights(), 2, episode_steps=env.episode_steps + 1)
+
+
+def test_synergy_actions_move_the_mount_by_deltas_and_blend_each_hand(vec):
+    env = vec.env
+    amap = ActionMap(env, "synergy", 0.05, ("power", "pinch"))
+    mount = [i for i, a in enumerate(env.embodiment.actuators) if "/hand/" not in a]
+    hand = [i for i, a in enumerate(env.embodiment.actuators) if "/hand/" in a]
+    assert amap.dim == len(mount) + 2
+    prev = env.home_action.float()[None].repeat(3, 1)
+    action = torch.zeros(3, amap.dim)
+    action[0, :len(mount)] = 1.0
+    action[:, -2:] = torch.tensor([[1.0, -1.0], [-1.0, -1.0], [0.0, -1.0]])
+    out = amap.targets(prev, action)
+    half = (env.action_high - env.action_low)[mount] / 2
+    torch.testing.assert_close(out[0, mount] - prev[0, mount].double(), 0.05 * half)
+    torch.testing.assert_close(out[1:, mount], prev[1:, mount].double())
+    poses = {k: torch.as_tensor(env.embodiment.poses[k])[hand] for k in ("open", "power")}
+    clip = lambda x: x.clamp(env.action_low[hand], env.action_high[hand])  # noqa: E731
+    torch.testing.assert_close(out[0, hand], clip(poses["power"]))
+    torch.testing.assert_close(out[1, hand], clip(poses["open"]))
+    torch.testing.assert_close(out[2, hand], clip((poses["open"] + poses["power"]) / 2))
+    two = make_env("OpenLaptop", num_envs=1, nthread=1)
+    assert ActionMap(two, "synergy", 0.05, ("power",)).dim == 12 + 2  # two wrists, two hands
+    with pytest.raises(ValueError, match="synergy"):
+        ActionMap(env, "synergy", 0.05, ("fist",))
 
 
 def test_lift_tasks_get_the_grasp_term(vec):
@@ -89,8 +116,11 @@ def test_ppo_smoke_run_and_rl_policy(tmp_path, monkeypatch):
     action = policy.act(obs)
     assert action.shape == (2, env.action_dim)
     assert (action >= env.action_low).all() and (action <= env.action_high).all()
+    meta = json.loads((run / "policy.json").read_text())
+    assert meta["action_mode"] == "synergy" and meta["action_dim"] == 6 + 1
+    mount = [i for i, a in enumerate(env.embodiment.actuators) if "/hand/" not in a]
     step = (action - obs["policy"].double()).abs() / (env.action_high - env.action_low)
-    assert step.max() <= json.loads((run / "policy.json").read_text())["action_scale"] / 2 + 1e-6
+    assert step[:, mount].max() <= meta["action_scale"] / 2 + 1e-6
 
 
 def test_rl_checkpoint_errors_say_what_to_pass(tmp_path):

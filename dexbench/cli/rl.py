@@ -25,6 +25,7 @@ from tqdm import tqdm
 from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, write_atomic
 from dexbench.envs.dex_env import DexEnv
 from dexbench.policies.rl import META_FILE
+from dexbench.rl.actions import ActionMap
 from dexbench.rl.config import runner_config
 from dexbench.rl.curve import plot_curve
 from dexbench.rl.rewards import RewardWeights
@@ -46,6 +47,15 @@ def build_env(cfg: DictConfig) -> DexEnv:
     return make_env(**kwargs)
 
 
+def action_map(cfg: DictConfig, env: DexEnv) -> ActionMap:
+    """`rl.action_mode` (joints or synergy, with `rl.synergies`) at `rl.action_scale`."""
+    try:
+        return ActionMap(env, str(cfg.rl.action_mode), float(cfg.rl.action_scale),
+                         tuple(cfg.rl.synergies))
+    except ValueError as err:
+        raise ConfigError(f"rl.action_mode/rl.synergies: {err}") from None
+
+
 def episode_steps(cfg: DictConfig, env: DexEnv) -> int | None:
     """Control steps of a training episode (`rl.episode_seconds`; null: the task's)."""
     seconds = cfg.rl.episode_seconds
@@ -64,7 +74,7 @@ def _meta(cfg: DictConfig, env: DexEnv, vec: RslVecEnv) -> dict:
             "actuators": list(env.embodiment.actuators),
             "actor_groups": list(vec.actor_groups), "critic_groups": list(vec.critic_groups),
             "actor_dim": int(obs["actor"].shape[1]), "critic_dim": int(obs["critic"].shape[1]),
-            "action_scale": float(cfg.rl.action_scale),
+            **vec.action_map.describe(),
             "network": OmegaConf.to_container(cfg.rl.network, resolve=True),
             "control_dt": env.control_dt, "sim_backend": str(cfg.sim.backend)}
 
@@ -77,7 +87,7 @@ def train(overrides: list[str]) -> dict:
     torch.manual_seed(int(cfg.seed))
     env = build_env(cfg)
     run_dir = new_run_dir("rl", f"{env.task.name}-{env.embodiment.name}", cfg)
-    vec = RslVecEnv(env, float(rl.action_scale), RewardWeights(**rl.rewards),
+    vec = RslVecEnv(env, action_map(cfg, env), RewardWeights(**rl.rewards),
                     int(rl.num_steps_per_env), episode_steps(cfg, env),
                     cfg=OmegaConf.to_container(cfg, resolve=True))
     write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")

@@ -2,7 +2,8 @@
 
 The checkpoint is a training run folder (its newest `model_<it>.pt`) or one
 `model_<it>.pt` in such a folder; `policy.json` beside it names the task, embodiment,
-action layout, the observation groups the actor reads and the delta-action scale.
+action layout, the observation groups the actor reads and how its outputs become joint
+targets (`dexbench.rl.actions.ActionMap`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from tensordict import TensorDict
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.policies.common.protocol import PolicySpec
-from dexbench.rl.vec_env import delta_targets
+from dexbench.rl.actions import ActionMap
 
 META_FILE = "policy.json"
 
@@ -57,7 +58,7 @@ def load_actor(model_path: pathlib.Path, meta: dict, device: torch.device | str)
     """The trained actor network (with its observation normalizer), in eval mode."""
     net = meta["network"]
     dummy = TensorDict({"actor": torch.zeros(1, meta["actor_dim"])}, batch_size=[1])
-    actor = MLPModel(dummy, {"actor": ["actor"]}, "actor", len(meta["actuators"]),
+    actor = MLPModel(dummy, {"actor": ["actor"]}, "actor", int(meta["action_dim"]),
                      hidden_dims=net["hidden_dims"], activation=net["activation"],
                      obs_normalization=net["obs_normalization"],
                      distribution_cfg={"class_name": "GaussianDistribution",
@@ -68,7 +69,7 @@ def load_actor(model_path: pathlib.Path, meta: dict, device: torch.device | str)
 
 
 class RlPolicy:
-    """Observation groups -> actor mean -> delta joint targets from the last targets."""
+    """Observation groups -> actor mean -> joint targets from the last targets."""
 
     def __init__(self, model_path: pathlib.Path, meta: dict, env: DexEnv,
                  device: torch.device | str) -> None:
@@ -76,10 +77,9 @@ class RlPolicy:
                                embodiment=meta["embodiment"],
                                action_layout=tuple(meta["actuators"]))
         self._groups = tuple(meta["actor_groups"])
-        self._scale = float(meta["action_scale"])
+        self._map = ActionMap.from_meta(env, meta)
         self._device = device
         self._actor = load_actor(model_path, meta, device)
-        self._low, self._high = env.action_low, env.action_high
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Stateless: the last targets come back in the `policy` observation group."""
@@ -88,9 +88,7 @@ class RlPolicy:
     def act(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
         x = torch.cat([obs[g].float() for g in self._groups], dim=1).to(self._device)
         action = self._actor(TensorDict({"actor": x}, batch_size=[len(x)]))
-        prev = obs["policy"].to(self._low.device)
-        return delta_targets(prev, action.to(self._low.device), self._low, self._high,
-                             self._scale)
+        return self._map.targets(obs["policy"].to(self._map.device), action)
 
 
 def build(checkpoint: str | None, env: DexEnv, device: torch.device | str) -> RlPolicy:

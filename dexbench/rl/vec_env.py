@@ -1,9 +1,8 @@
 """RSL-RL's `VecEnv` over a batched `DexEnv`.
 
-Actions are deltas of the joint targets: the policy's output a (N, A), clipped to
-[-1, 1], moves each target by `action_scale` x half its actuator range per control step,
-from the targets applied last (the env's `policy` observation group, the home pose after
-a reset), so exploration noise makes a random walk rather than jumps across the range.
+Actions become joint targets through an `ActionMap` (`dexbench.rl.actions`: per-joint
+deltas, or mount deltas plus synergy weights per hand), from the targets applied last
+(the env's `policy` observation group, the home pose after a reset).
 The actor sees the state observation groups, the critic those plus `privileged`.
 Training episodes last `episode_steps` control steps and do not end at success: ending
 them there would make success cost the positive reward of every later step, so PPO would
@@ -24,6 +23,7 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from dexbench.envs.dex_env import DexEnv
+from dexbench.rl.actions import ActionMap
 from dexbench.rl.rewards import RewardTerms, RewardWeights
 
 ACTOR_GROUPS = ("policy", "proprio", "contact", "state", "goal")
@@ -33,14 +33,6 @@ CRITIC_EXTRA = ("privileged",)
 def actor_groups(env: DexEnv) -> tuple[str, ...]:
     """The state groups this task populates, in the actor's (fixed) order."""
     return tuple(g for g in ACTOR_GROUPS if g in env.obs_shapes())
-
-
-def delta_targets(prev_targets: torch.Tensor, action: torch.Tensor, low: torch.Tensor,
-                  high: torch.Tensor, scale: float) -> torch.Tensor:
-    """Joint targets after a delta action (shared by training and the `rl` policy)."""
-    half = (high - low) / 2
-    step = scale * half * action.clamp(-1.0, 1.0).to(half.dtype)
-    return torch.minimum(torch.maximum(prev_targets.to(half.dtype) + step, low), high)
 
 
 @dataclass
@@ -74,28 +66,28 @@ class Curve:
 class RslVecEnv(VecEnv):
     """A `DexEnv` (built with `auto_reset=False` and the actor + critic groups) for RSL-RL."""
 
-    def __init__(self, env: DexEnv, action_scale: float, weights: RewardWeights,
+    def __init__(self, env: DexEnv, action_map: ActionMap, weights: RewardWeights,
                  steps_per_iteration: int, episode_steps: int | None = None,
                  cfg: dict | None = None) -> None:
         if env.auto_reset:
             raise ValueError("build the env with auto_reset=False: RslVecEnv resets it")
         self.env = env
         self.num_envs = env.num_envs
-        self.num_actions = env.action_dim
+        self.action_map = action_map
+        self.num_actions = action_map.dim
         self.max_episode_length = episode_steps or env.episode_steps
         if not 0 < self.max_episode_length <= env.episode_steps:
             raise ValueError(f"episode_steps must be in 1..{env.episode_steps} (the task's "
                              f"time limit), got {episode_steps}")
         self.device = env.device
         self.cfg = cfg or {}
-        self.action_scale = action_scale
         self.actor_groups = actor_groups(env)
         have = env.obs_shapes()
         self.critic_groups = self.actor_groups + tuple(g for g in CRITIC_EXTRA if g in have)
         self.rewards = RewardTerms(env, weights)
         self._steps_per_iteration = steps_per_iteration
         self._total_steps = 0
-        self._prev_action = torch.zeros(env.num_envs, env.action_dim, device=env.device)
+        self._prev_action = torch.zeros(env.num_envs, action_map.dim, device=env.device)
         self._solved = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
         self._obs = env.reset()
         self.curve = Curve()
@@ -122,8 +114,7 @@ class RslVecEnv(VecEnv):
                                                    dict]:
         env = self.env
         action = actions.to(self.device).clamp(-1.0, 1.0)
-        targets = delta_targets(env.last_action, action, env.action_low, env.action_high,
-                                self.action_scale)
+        targets = self.action_map.targets(env.last_action, action)
         obs, task_reward, terminated, _, info = env.step(targets)
         reward, terms = self.rewards(task_reward, obs, action, self._prev_action)
         self._solved |= terminated
