@@ -36,7 +36,7 @@ class TaskResult:
     ci_low: float
     ci_high: float
     mean_steps: float
-    wall_time_s: float  # summed per-episode wall time (episodes overlap when batched)
+    mean_episode_s: float  # wall time of an episode, averaged (batched episodes overlap)
 
 
 def task_result(task: str, category: str, records: Iterable[EpisodeRecord]) -> TaskResult:
@@ -45,7 +45,7 @@ def task_result(task: str, category: str, records: Iterable[EpisodeRecord]) -> T
     k = sum(r.success for r in records)
     low, high = wilson_interval(k, n)
     return TaskResult(task, category, n, k, k / n, low, high,
-                      sum(r.steps for r in records) / n, sum(r.time_s for r in records))
+                      sum(r.steps for r in records) / n, sum(r.time_s for r in records) / n)
 
 
 def summarize(groups: dict[str, list[str]], records: Iterable[EpisodeRecord],
