@@ -12,6 +12,7 @@ import shutil
 
 import mujoco
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
 import torch
 from lerobot.datasets import LeRobotDataset
@@ -264,12 +265,21 @@ def test_validate_catches_corruption_with_clear_messages(demos, tmp_path, capsys
     assert capsys.readouterr().out.splitlines()[0].endswith("ok")
 
     data = copy / "data/chunk-000/file-000.parquet"
+    assert pq.ParquetFile(data).metadata.row_group(0).column(0).compression == "ZSTD"
     good = data.read_bytes()
     data.write_bytes(good[: len(good) // 2])
     report = validate_dataset(copy, check_code=False)
     assert not report.ok and "file-000.parquet is truncated or corrupt" in report.errors[0]
-    data.write_bytes(good[:100] + bytes(200) + good[300:])  # still parses
-    assert "differs from the checksum" in validate_dataset(copy, check_code=False).errors[0]
+    data.write_bytes(good[:100] + bytes(200) + good[300:])  # zstd pages no longer decode
+    assert "file-000.parquet is truncated or corrupt" in validate_dataset(
+        copy, check_code=False).errors[0]
+    data.write_bytes(good)
+    stats = copy / "meta/stats.json"
+    text = stats.read_text()
+    stats.write_text(text.replace("1", "2", 1))  # still parses
+    errors = validate_dataset(copy, check_code=False).errors
+    assert "stats.json" in errors[0] and "differs from the checksum" in errors[0]
+    stats.write_text(text)
     data.unlink()
     assert "file-000.parquet is missing" in validate_dataset(copy, check_code=False).errors[0]
     data.write_bytes(good)

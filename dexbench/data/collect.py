@@ -26,7 +26,7 @@ from tqdm import tqdm
 from dexbench.data.episode import Episode
 from dexbench.data.features import ACTION, GROUP_OF, SIM_STATE, dataset_features, feature_key
 from dexbench.data.files import digests, publish, write_json
-from dexbench.data.lerobot_io import add_episode, create_dataset, read_episodes
+from dexbench.data.lerobot_io import add_episode, create_dataset, read_episodes, recompress
 from dexbench.data.meta import META_FILE, DatasetError, env_meta, read_meta
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
@@ -282,6 +282,7 @@ def _assemble(out: pathlib.Path, staging: Staging, meta: dict, episodes: list[Ep
         add_episode(dataset, meta["instruction"], {ACTION: ep.actions, SIM_STATE: ep.states,
                                                    **ep.obs})
     dataset.finalize()
+    recompress(build)
     files = digests(build, META_FILE)
     meta = {**meta, "repo_id": dataset.repo_id, "files": files, "episodes": [
         {"episode_index": i, "key": list(ep.key), "length": ep.length, "success": True,

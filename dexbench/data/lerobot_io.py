@@ -40,6 +40,21 @@ def add_episode(dataset: LeRobotDataset, instruction: str,
     dataset.save_episode()
 
 
+def recompress(root: pathlib.Path, level: int = 3) -> None:
+    """Re-encode a finished dataset's parquet files with zstd instead of LeRobot's snappy.
+
+    Simulator states are float64 and barely compress under snappy; zstd stores a PickCube
+    demo ~25% smaller, and every parquet reader (LeRobot's included) reads it unchanged.
+    Each file is written beside itself, then renamed over it.
+    """
+    for path in [*root.glob(DATA_GLOB), *root.glob("meta/episodes/chunk-*/file-*.parquet")]:
+        tmp = path.with_name(f".{path.name}.tmp")
+        table = pq.read_table(path)
+        pq.write_table(table, tmp, compression="zstd", compression_level=level,
+                       use_dictionary=True)
+        tmp.replace(path)
+
+
 def info(root: pathlib.Path) -> dict:
     path = root / "meta" / "info.json"
     try:
