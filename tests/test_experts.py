@@ -27,11 +27,11 @@ def test_adapter_puts_the_palm_where_commanded(embodiment):
     site = env.scene.model.site(env.embodiment.sides["right"].palm_site).id
     pos = env.sim.field("site_xpos")[:, site].numpy()
     mat = env.sim.field("site_xmat")[:, site].numpy().reshape(-1, 3, 3)
-    # Tolerances cover the arms' own steady-state tracking error (joint friction against
-    # position servos: the xArm7 wrist lags its target by up to ~0.07 rad).
-    assert np.linalg.norm(pos - target, axis=1).max() < 0.01
+    # Millimetre tracking on every mount (the xArm7's wrist chattered ~0.2 rad off its
+    # target before its joints got an armature floor: `ArmSpec.armature`).
+    assert np.linalg.norm(pos - target, axis=1).max() < 0.003
     cos = (np.einsum("nij,nij->n", mat, rot) - 1) / 2
-    assert np.arccos(np.clip(cos, -1, 1)).max() < 0.1
+    assert np.arccos(np.clip(cos, -1, 1)).max() < 0.02
     hand = [i for i, a in enumerate(env.embodiment.actuators) if "/hand/" in a]
     ctrl = env.sim.field("ctrl").numpy()
     np.testing.assert_allclose(ctrl[0, hand], env.embodiment.poses["open"][hand])
@@ -46,6 +46,13 @@ def test_adapter_puts_the_palm_where_commanded(embodiment):
 def test_expert_solves_task_on_floating_shadow(task, embodiment):
     solved = _solved(task, embodiment, seed=3, enough=4)
     assert solved >= 3, f"{task}: expert solved {solved}/4"
+
+
+@pytest.mark.parametrize(("task", "seed", "minimum"), [
+    ("FunctionalPourMug", 0, 3), ("MakeCoffee", 1, 3), ("GraspTwoItems", 0, 1)])
+def test_task_specific_expert_solves_on_floating_shadow(task, seed, minimum):
+    solved = _solved(task, "floating_shadow", seed=seed, enough=4)
+    assert solved >= minimum, f"{task}: expert solved {solved}/4"
 
 
 def _solved(task: str, embodiment: str | None, seed: int, enough: int) -> int:

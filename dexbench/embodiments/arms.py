@@ -28,6 +28,10 @@ class ArmSpec:
     level there, so they carry the hand inline; the FR3 cannot (joint 6's lower limit,
     ~0.54 rad, forbids a level, forward-pointing flange low down), so its hand sits flat
     under a downward flange, the usual Franka posture.
+
+    `armature` (kg m^2) is a floor on every arm joint's rotor inertia. Without any (the
+    xArm7 model), a wrist servo that hits its force limit (kv 80 on a light link) locks
+    into a bang-bang chatter at the 240 Hz step, ~0.2 rad off its target for good.
     """
 
     name: str
@@ -36,6 +40,7 @@ class ArmSpec:
     seed_qpos: tuple[float, ...]
     hand_rot: np.ndarray
     flange_reach: float = 0.4
+    armature: float = 0.0
 
 
 ARMS: dict[str, ArmSpec] = {
@@ -62,5 +67,6 @@ ARMS: dict[str, ArmSpec] = {
         seed_qpos=(0.0, 0.0, 0.0, 1.2, 0.0, 1.2, 0.0),
         hand_rot=INLINE_MOUNT,
         flange_reach=0.30,
+        armature=0.05,
     ),
 }

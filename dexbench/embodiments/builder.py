@@ -215,6 +215,8 @@ def _add_arm_side(spec: mujoco.MjSpec, arm: str, hand: str, side: str, palm_pos,
     for key in list(arm_spec.keys):
         arm_spec.delete(key)
     _adopt_options(arm_spec, spec)
+    for joint in arm_spec.joints:
+        joint.armature = max(joint.armature, info.armature)
     prefix = f"{side}/arm/"
     arm_joints = [prefix + j.name for j in arm_spec.joints]
     arm_root = prefix + arm_spec.worldbody.first_body().name

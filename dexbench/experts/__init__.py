@@ -12,13 +12,16 @@ from dexbench.assets.objects import T_SHAPE_RECTS, T_THICKNESS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.experts.bimanual import TwoHandLiftExpert, TwoHandPlan
+from dexbench.experts.coffee import make_coffee
 from dexbench.experts.grasp import GraspExpert, GraspPlan, Phase, task_goal
 from dexbench.experts.insert import InsertExpert, InsertPlan
 from dexbench.experts.motion import body_yaw, turnable_offset
+from dexbench.experts.pour import pour_mug
 from dexbench.experts.press import PressExpert, PressPlan
 from dexbench.experts.push import PushExpert, PushPlan
 from dexbench.experts.sequence import SequenceExpert
 from dexbench.experts.turn import TurnExpert, TurnPlan
+from dexbench.experts.two_items import TwoItemsExpert
 
 
 def _on_base_cube(env: DexEnv):
@@ -114,7 +117,14 @@ def _grasp_then_insert(env: DexEnv) -> Expert:
 
 PEG_RAISED = 0.03  # m: the held peg is clear of the table, the hand may turn it
 PEG_DROPPED = 0.015  # m: back on the table (or stalled lining up), it is grasped again
-SEQUENCES = {"OpenDrawer_RelocateSphere": _drawer_then_ball, "InsertPeg": _grasp_then_insert}
+# Task-specific scripts, by task: factories of an expert for an env.
+SEQUENCES = {
+    "OpenDrawer_RelocateSphere": _drawer_then_ball,
+    "InsertPeg": _grasp_then_insert,
+    "FunctionalPourMug": pour_mug,  # side grasp of the body, turned about the palm normal
+    "GraspTwoItems": TwoItemsExpert,  # stack one item on the other, lift both
+    "MakeCoffee": make_coffee,  # tip the carton over, pour, place the mug, press the lever
+}
 
 
 def _goal_pose(env: DexEnv) -> np.ndarray:

@@ -66,6 +66,15 @@ class ActionAdapter:
         self._poses = emb.poses
         self._solution: dict[str, np.ndarray] = {}
 
+    def pose(self, name: str) -> np.ndarray:
+        """A named pose (every actuator's target) commands can blend towards."""
+        return self._poses[name]
+
+    def add_pose(self, name: str, targets: np.ndarray) -> None:
+        """One more pose for this adapter's commands (an expert's own closure); the
+        embodiment's pose table stays as it is."""
+        self._poses = {**self._poses, name: np.asarray(targets)}
+
     def reset(self, env_ids: np.ndarray) -> None:
         """Forget warm starts of these envs (their robots are back at home)."""
         for side, (_, joints, _, _) in self._sides.items():
