@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from dexbench.assets.objects import T_SHAPE_RECTS
-from dexbench.experts import make_expert
+from dexbench.experts import coffee, make_expert
 from dexbench.experts.adapter import ActionAdapter, HandCommand
 from dexbench.experts.motion import palm_down, turned
 from dexbench.experts.push import inside_rects, outline
@@ -53,6 +53,11 @@ def test_expert_solves_task_on_floating_shadow(task, embodiment):
 def test_task_specific_expert_solves_on_floating_shadow(task, seed, minimum):
     solved = _solved(task, "floating_shadow", seed=seed, enough=4)
     assert solved >= minimum, f"{task}: expert solved {solved}/4"
+
+
+def test_coffee_expert_spout_is_the_cartons():
+    env = make_env("MakeCoffee", num_envs=1, nthread=1)
+    assert env.task.objects["milk"].points["spout"] == ("milk", coffee.SPOUT)
 
 
 def _solved(task: str, embodiment: str | None, seed: int, enough: int) -> int:

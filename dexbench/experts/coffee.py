@@ -27,9 +27,8 @@ from dexbench.experts.press import PressExpert, PressPlan
 from dexbench.experts.sequence import SequenceExpert
 from dexbench.tasks.predicates import tilt_deg
 
-SPOUT = (0.03, 0.0, 0.16)  # `add_milk_carton`'s spout point, carton frame
+SPOUT = (0.03, 0.0, 0.16)  # `add_milk_carton`'s spout point, carton frame (tested equal)
 CARTON_HALF = 0.03  # m, its half width
-MUG_RIM = (0.0, 0.0, 0.095)
 TIP_AWAY = (0.0, 1.0, 0.0)  # world direction the carton is tipped over in (away from the mug)
 TIP_HEIGHT = 0.12  # m above the table the finger tips push the carton's face (it is 0.14)
 TIP_START = 0.04  # m short of the carton's face the finger tips start
@@ -69,7 +68,7 @@ def _carton_up(env: DexEnv) -> np.ndarray:
 def _carton_target(env: DexEnv) -> np.ndarray:
     """Where the spout goes: over the rim; once poured, straight away from the mug."""
     view = env.view
-    rim = view.point_pos("mug", MUG_RIM).cpu().numpy()
+    rim = view.point_pos(*env.task.objects["mug"].points["rim"]).cpu().numpy()
     spout = view.point_pos("milk", SPOUT).cpu().numpy()
     # Come in high: the carton hangs below the spout; go down only once over the rim.
     off = np.linalg.norm((spout - rim)[:, :2], axis=1)
