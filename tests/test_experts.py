@@ -57,6 +57,12 @@ def test_task_specific_expert_solves_on_floating_shadow(task, seed, minimum):
     assert solved >= minimum, f"{task}: expert solved {solved}/4"
 
 
+@pytest.mark.parametrize(("embodiment", "seed"), [("ur10e_leap", 3), ("xarm7_leap", 0)])
+def test_pick_expert_on_arm_mounted_leap(embodiment, seed):
+    solved = _solved("PickCube", embodiment, seed=seed, enough=4)
+    assert solved >= 3, f"PickCube on {embodiment}: expert solved {solved}/4"
+
+
 def test_coffee_expert_spout_is_the_cartons():
     env = make_env("MakeCoffee", num_envs=1, nthread=1)
     assert env.task.objects["milk"].points["spout"] == ("milk", coffee.SPOUT)
