@@ -35,6 +35,23 @@ class HandCommand:
     synergy: str = "power"
 
 
+def site_pose(env: DexEnv, site: int) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 3) positions and (N, 3, 3) frames of one site in every env (copies: the
+    simulator overwrites its arrays on the next step)."""
+    sim = env.sim
+    pos = sim.field("site_xpos")[:, site].numpy().copy()
+    return pos, sim.field("site_xmat")[:, site].numpy().reshape(-1, 3, 3).copy()
+
+
+def tips_in_palm_frame(env: DexEnv, palm: int, tips: list[int],
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The palm site's pose in every env and the fingertip sites' offsets from it in the
+    palm frame, (N, len(tips), 3): where the fingers are, whatever the palm's pose."""
+    pos, rot = site_pose(env, palm)
+    sites = env.sim.field("site_xpos").numpy()[:, tips]
+    return pos, rot, np.einsum("nji,nkj->nki", rot, sites - pos[:, None])
+
+
 def palm_and_finger_sites(env: DexEnv, side: str) -> tuple[int, list[int]]:
     """Site ids of a hand's palm and of its fingertips without the thumb (listed first)."""
     model = env.scene.model

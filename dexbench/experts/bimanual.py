@@ -22,7 +22,7 @@ import torch
 
 from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.motion import palm_down, step_towards
 from dexbench.tasks.predicates import tilt_deg
 
@@ -98,10 +98,7 @@ class TwoHandLiftExpert:
         self.offset = {s: self._offset.copy() for s in plan.grips}
 
     def _palm(self, side: str) -> tuple[np.ndarray, np.ndarray]:
-        sim, site = self.env.sim, self._palm_site[side]
-        pos = sim.field("site_xpos")[:, site].numpy().copy()
-        rot = sim.field("site_xmat")[:, site].numpy().reshape(-1, 3, 3).copy()
-        return pos, rot
+        return site_pose(self.env, self._palm_site[side])
 
     def _mirror(self, env: int) -> dict[str, float]:
         """-1 for a side whose thumb lies across the hand frame's y axis from the right

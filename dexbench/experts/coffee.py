@@ -20,7 +20,12 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand, palm_and_finger_sites
+from dexbench.experts.adapter import (
+    ActionAdapter,
+    HandCommand,
+    palm_and_finger_sites,
+    tips_in_palm_frame,
+)
 from dexbench.experts.grasp import GraspExpert, GraspPlan, Phase
 from dexbench.experts.motion import palm_down, pitch_down, step_towards
 from dexbench.experts.press import PressExpert, PressPlan
@@ -122,11 +127,9 @@ class ReachExpert:
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
-        sites = self.env.sim.field("site_xpos").numpy()
-        rot = self.env.sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3)
-        self.pos[ids], self.rot[ids] = sites[ids, self._palm], rot[ids]
-        tips = sites[ids][:, self._tips].mean(axis=1) - sites[ids, self._palm]
-        self.tips[ids] = np.einsum("nji,nj->ni", rot[ids], tips)
+        pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
+        self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
+        self.tips[ids] = tips[ids].mean(axis=1)
         self.start[ids] = self.pos[ids]
         self.adapter.reset(ids)
 

@@ -19,7 +19,7 @@ import torch
 from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.rotations import quat_apply
-from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.motion import (
     HANDSHAKE_ROT,
     body_yaw,
@@ -124,10 +124,7 @@ class GraspExpert:
         self.travel_z = np.zeros(n)
 
     def _palm(self) -> tuple[np.ndarray, np.ndarray]:
-        sim = self.env.sim
-        pos = sim.field("site_xpos")[:, self._palm_site].numpy().copy()
-        rot = sim.field("site_xmat")[:, self._palm_site].numpy().reshape(-1, 3, 3).copy()
-        return pos, rot
+        return site_pose(self.env, self._palm_site)
 
     def _object_point(self, local: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
         view = self.env.view

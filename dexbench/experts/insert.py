@@ -16,7 +16,7 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.motion import step_towards, turned
 
 SPEED = 0.15  # m/s while lining up
@@ -67,9 +67,7 @@ class InsertExpert:
         return self.line_up_time > STALL_SECONDS
 
     def _palm_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        sim = self.env.sim
-        pos = sim.field("site_xpos")[:, self._palm].numpy().copy()
-        return pos, sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3).copy()
+        return site_pose(self.env, self._palm)
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)

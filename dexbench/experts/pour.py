@@ -75,8 +75,7 @@ class PourExpert:
         self._angle = np.zeros(env.num_envs)
         self._dt = env.control_dt
         actuators = env.embodiment.actuators
-        model = env.scene.model
-        ranges = np.array([model.actuator(a).ctrlrange for a in actuators])
+        ranges = env.embodiment.ctrl_range
         # The adapter blends `open` towards a named pose; this expert's adapter gets one more.
         adapter = self.grasp.adapter
         opened, closed = adapter.pose("open"), adapter.pose(plan.grasp.synergy)

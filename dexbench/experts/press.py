@@ -14,7 +14,7 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.adapter import ActionAdapter, HandCommand, tips_in_palm_frame
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 
 HOVER = 0.08  # m above the point before pressing
@@ -54,13 +54,10 @@ class PressExpert:
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
-        sim = self.env.sim
-        pos = sim.field("site_xpos").numpy()
-        rot = sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3)
-        self.pos[ids], self.rot[ids] = pos[ids, self._palm], rot[ids]
+        pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
+        self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         if self.plan.with_fingers:
-            tip = pos[ids][:, self._tips].mean(axis=1) - pos[ids, self._palm]
-            self.contact[ids] = np.einsum("nji,nj->ni", rot[ids], tip)
+            self.contact[ids] = tips[ids].mean(axis=1)
         else:
             self.contact[ids] = 0.0
         self.pressing[ids] = False

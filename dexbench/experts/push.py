@@ -21,7 +21,12 @@ import torch
 
 from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand, palm_and_finger_sites
+from dexbench.experts.adapter import (
+    ActionAdapter,
+    HandCommand,
+    palm_and_finger_sites,
+    tips_in_palm_frame,
+)
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
 
 SPEED = 0.4  # m/s in the air
@@ -138,12 +143,9 @@ class PushExpert:
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
-        sim = self.env.sim
-        pos = sim.field("site_xpos").numpy()
-        rot = sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3)
-        palm = pos[ids, self._palm]
-        tips = pos[ids][:, self._tips] - palm[:, None]
-        self.offsets[ids] = np.einsum("nji,nkj->nki", rot[ids], tips)
+        pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
+        palm = pos[ids]
+        self.offsets[ids] = tips[ids]
         self.rot[ids] = rot[ids]
         self.lead[ids] = 0
         self.tip[ids] = palm + np.einsum("nij,nj->ni", rot[ids], self.offsets[ids, 0])

@@ -15,7 +15,12 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand, palm_and_finger_sites
+from dexbench.experts.adapter import (
+    ActionAdapter,
+    HandCommand,
+    palm_and_finger_sites,
+    tips_in_palm_frame,
+)
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 
 SPEED = 0.4  # m/s in the air
@@ -60,12 +65,9 @@ class TurnExpert:
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
-        sim = self.env.sim
-        pos = sim.field("site_xpos").numpy()
-        rot = sim.field("site_xmat")[:, self._palm].numpy().reshape(-1, 3, 3)
-        self.pos[ids], self.rot[ids] = pos[ids, self._palm], rot[ids]
-        tip = pos[ids][:, self._tips].mean(axis=1) - pos[ids, self._palm]
-        self.pads[ids] = np.einsum("nji,nj->ni", rot[ids], tip)
+        pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
+        self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
+        self.pads[ids] = tips[ids].mean(axis=1)
         self.stage[ids] = 0
         self.adapter.reset(ids)
 

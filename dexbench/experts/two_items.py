@@ -29,9 +29,10 @@ import numpy as np
 import torch
 
 from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.embodiments.hand_geometry import thumb_actuators
 from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand
+from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.motion import body_yaw, palm_down, step_towards, wrap, yawed
 
 
@@ -151,7 +152,9 @@ class TwoItemsExpert:
         self._power = emb.poses["power"][self._hand]
         self._closed = {name: emb.poses[ITEMS[name].synergy][self._hand] for name in self.names}
         self._ready = self._open.copy()
-        self._thumb = _thumb_actuators(env, side)[self._hand]
+        layout = emb.sides[side]
+        self._thumb = thumb_actuators(model, model.site(layout.palm_site).bodyid[0],
+                                      model.site(layout.fingertip_sites[0]).bodyid[0])[self._hand]
         low, high = emb.ctrl_range[self._hand].T
         for k, i in enumerate(self._hand):
             name = emb.actuators[i].rsplit("_", 2)[-2:]
@@ -177,10 +180,7 @@ class TwoItemsExpert:
         self.base = np.zeros(n, dtype=np.int64)
 
     def _palm(self) -> tuple[np.ndarray, np.ndarray]:
-        sim = self.env.sim
-        pos = sim.field("site_xpos")[:, self._palm_site].numpy().copy()
-        rot = sim.field("site_xmat")[:, self._palm_site].numpy().reshape(-1, 3, 3).copy()
-        return pos, rot
+        return site_pose(self.env, self._palm_site)
 
     def _items(self) -> tuple[np.ndarray, np.ndarray]:
         """(N, 5, 3) positions and (N, 5) yaws of every candidate shape."""
@@ -227,7 +227,7 @@ class TwoItemsExpert:
             heading = self._heading(self.top[i:i + 1], yaws[i:i + 1, self.top[i]],
                                     np.arctan2(away[1:2], away[0:1]))
             self.grasp_rot[i] = palm_down(heading)[0]
-        point = items[i, self.top[i]] + _yawed(item.point, yaw)
+        point = items[i, self.top[i]] + yawed(np.eye(3), np.array([yaw]))[0] @ item.point
         self.grasp_pos[i] = point - self.grasp_rot[i] @ (self.offset + np.asarray(item.shift))
 
     def _side_yaw(self, yaws: np.ndarray) -> np.ndarray:
@@ -437,21 +437,6 @@ class TwoItemsExpert:
         self.timer[mask] = 0.0
 
 
-def _thumb_actuators(env: DexEnv, side: str) -> np.ndarray:
-    """(nu,) bool: the actuators driving a joint of the hand's thumb (the chain from the
-    palm to its first fingertip site)."""
-    model = env.scene.model
-    layout = env.embodiment.sides[side]
-    palm = model.site(layout.palm_site).bodyid[0]
-    body, chain = model.site(layout.fingertip_sites[0]).bodyid[0], set()
-    while body not in (palm, 0):
-        adr, num = model.body_jntadr[body], model.body_jntnum[body]
-        chain.update(range(adr, adr + num))
-        body = model.body_parentid[body]
-    return np.array([model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
-                     and model.actuator_trnid[a, 0] in chain for a in range(model.nu)])
-
-
 def _reach(kind: int, size: np.ndarray, up: np.ndarray) -> np.ndarray:
     """(N,) how far a geom (MuJoCo type and size) reaches below its centre along world z,
     given world z in its frame (N, 3)."""
@@ -477,10 +462,3 @@ def _side_grasp(centre: np.ndarray, rot: np.ndarray, offset: np.ndarray) -> np.n
     pos = centre - rot @ (offset + np.asarray(SIDE_SHIFT))
     pos[:, 2] += SIDE_RISE
     return pos
-
-
-def _yawed(local: tuple[float, float, float], yaw: float) -> np.ndarray:
-    """A body-frame offset of an upright body turned by `yaw` about world z."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    x, y, z = local
-    return np.array([c * x - s * y, s * x + c * y, z])
