@@ -198,3 +198,29 @@ def test_warp_renderer_depth_agrees_with_cpu_renderer(visual):
         diff = (a.depth - b.depth).abs()[seen]
         assert diff.median() < 0.005, f"{cam}: median |depth diff| {diff.median():.4f} m"
         assert (b.rgb.float().mean() - a.rgb.float().mean()).abs() < 40, cam
+
+
+@pytest.mark.parametrize("kind", ["cpu", "warp"])
+def test_shadows_off_only_brightens_shaded_pixels(kind):
+    """`shadows=False` (camera.shadows) removes the hand's and objects' shadows on both
+    renderers: geometry (depth) is unchanged, pixels get brighter (but for a few at
+    shadow-map edges), and many do."""
+    from dexbench.sim.render import CpuRenderer
+    from dexbench.sim.warp_render import WarpRenderer
+
+    env = make_env("StackCube", num_envs=1, seed=2, obs="state")
+    env.reset()
+
+    def render(shadows: bool):
+        if kind == "cpu":
+            renderer = CpuRenderer(env.sim, 64, 48, shadows)
+        else:
+            renderer = WarpRenderer(env.sim, 64, 48, device="cpu", shadows=shadows)
+        return renderer.render(["front"], rgb=True, depth=True)["front"]
+
+    lit, shaded = render(False), render(True)
+    torch.testing.assert_close(lit.depth, shaded.depth)
+    gain = lit.rgb.float().mean(dim=-1) - shaded.rgb.float().mean(dim=-1)
+    darker, brighter = int((gain < -3).sum()), int((gain > 10).sum())
+    assert darker <= 0.002 * gain.numel(), f"{kind}: {darker} px darker without shadows"
+    assert brighter > 100, f"{kind}: only {brighter} px lost a shadow"

@@ -74,6 +74,21 @@ def test_bench_sim_reports_throughput_and_writes_run_dir():
     assert (run_dir / "config.yaml").exists()
 
 
+def test_bench_sim_on_warp_times_env_raw_and_camera_with_and_without_shadows():
+    """The GPU benchmark's code path, on warp's CPU device (tiny sizes)."""
+    from dexbench.cli.bench import format_table
+
+    result = bench_sim(["sim.backend=warp", "num_envs=2", "steps=3", "warmup=1",
+                        "camera_envs=2", "width=16", "height=16"])
+    for key in ("env_steps_per_s", "raw_physics_steps_per_s", "ratio",
+                "env_steps_per_s_without_contact", "camera_env_steps_per_s",
+                "camera_no_shadows_env_steps_per_s"):
+        assert result[key] > 0, key
+    assert result["sim_warnings"] == 0
+    table = format_table(result)
+    assert "without shadows" in table and "ratio env/raw" in table
+
+
 def test_bench_render_reports_images_per_second():
     result = bench_render(["num_envs=2", "steps=2", "width=32", "height=32",
                            "renderers=[cpu,warp]"])

@@ -53,7 +53,7 @@ def env_kwargs(cfg: DictConfig) -> dict:
                 nthread=int(cfg.sim.nthread), physics=physics,
                 cameras=list(cam.names) if cam.names else None,
                 image_size=(int(cam.width), int(cam.height)), num_points=int(cam.num_points),
-                renderer=cam.renderer,
+                renderer=cam.renderer, shadows=bool(cam.shadows),
                 visual=VisualVariation(**OmegaConf.to_container(cfg.visual)),
                 physical=PhysicalVariation(**{
                     k: tuple(v) if isinstance(v, list) else v

@@ -56,7 +56,8 @@ class DexEnv:
     that terminate or truncate are reset inside `step`. Camera groups render `cameras`
     (default: the preset's: front, or front/left/right when multiview; wrist cameras are
     `<side>/hand/wrist_cam`) at `image_size` (width, height) with `renderer` (`cpu`:
-    OpenGL, `warp`: mujoco_warp ray tracing on the GPU); the point cloud keeps
+    OpenGL, `warp`: mujoco_warp ray tracing on the GPU), with the lights' shadows unless
+    `shadows` is off (faster, mostly for the ray tracer); the point cloud keeps
     `num_points` points. `terminated` is success held for `SUCCESS_HOLD_STEPS` steps;
     `info["success"]` is the task's condition at this step.
     """
@@ -76,6 +77,7 @@ class DexEnv:
         cameras: tuple[str, ...] | list[str] | None = None,
         image_size: tuple[int, int] = (256, 256),
         renderer: str = "cpu",
+        shadows: bool = True,
         num_points: int = 512,
         visual: VisualVariation | None = None,
         physical: PhysicalVariation | None = None,
@@ -115,7 +117,7 @@ class DexEnv:
         self.cameras: CameraObservations | None = None
         if camera_groups:
             names = tuple(cameras) if cameras else default_cameras(preset.multiview)
-            renderer = make_renderer(self.sim, *image_size, kind=renderer)
+            renderer = make_renderer(self.sim, *image_size, kind=renderer, shadows=shadows)
             self.cameras = CameraObservations(renderer, names, camera_groups, num_points)
         self._terms = ObservationTerms(self.scene, self.view, task, fields)
 

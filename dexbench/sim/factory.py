@@ -27,15 +27,17 @@ def make_backend(name: str, model: mujoco.MjModel, num_envs: int, nthread: int =
     raise ValueError(f"unknown sim backend {name!r}; available: {', '.join(BACKENDS)}")
 
 
-def make_renderer(backend: SimBackend, width: int, height: int,
-                  kind: str = "cpu") -> CpuRenderer | WarpRenderer:
+def make_renderer(backend: SimBackend, width: int, height: int, kind: str = "cpu",
+                  shadows: bool = True) -> CpuRenderer | WarpRenderer:
     """A renderer for a backend: `cpu` (OpenGL, `mujoco.Renderer`; CPU backend only) or
-    `warp` (ray traced, on CUDA when there is a GPU; the warp backend's own arrays)."""
+    `warp` (ray traced, on CUDA when there is a GPU; the warp backend's own arrays).
+    `shadows` off skips the lights' shadows (the ray tracer then casts one ray per pixel
+    instead of two)."""
     if kind not in RENDERERS:
         raise ValueError(f"unknown renderer {kind!r}; available: {', '.join(RENDERERS)}")
     if kind == "warp":
-        return WarpRenderer(backend, width, height)
+        return WarpRenderer(backend, width, height, shadows=shadows)
     if not isinstance(backend, CpuBackend):
         raise ValueError(f"the cpu renderer needs the cpu backend; with "
                          f"{type(backend).__name__} use camera.renderer=warp")
-    return CpuRenderer(backend, width, height)
+    return CpuRenderer(backend, width, height, shadows)

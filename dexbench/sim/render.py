@@ -33,7 +33,8 @@ class CameraFrames:
 class CpuRenderer:
     """Renders named cameras of every world of a `CpuBackend`."""
 
-    def __init__(self, backend: CpuBackend, width: int, height: int) -> None:
+    def __init__(self, backend: CpuBackend, width: int, height: int,
+                 shadows: bool = True) -> None:
         self._backend = backend
         self._model = backend.model
         self.width, self.height = width, height
@@ -44,6 +45,7 @@ class CpuRenderer:
                 f"cannot create an offscreen OpenGL context ({err}); headless machines "
                 "need MUJOCO_GL=egl (libEGL) or MUJOCO_GL=osmesa set before mujoco is "
                 "first imported (importing dexbench first sets egl by default)") from None
+        self._renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
         self._data = mujoco.MjData(self._model)
         self._world_model = copy.copy(self._model)  # scratch for per-world fields
         self._option = mujoco.MjvOption()

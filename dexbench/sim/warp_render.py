@@ -48,11 +48,13 @@ class WarpRenderer:
     """Renders named cameras of every world of a `CpuBackend` or a `WarpBackend` with
     mujoco_warp."""
 
-    def __init__(self, backend, width: int, height: int, device: str | None = None) -> None:
+    def __init__(self, backend, width: int, height: int, device: str | None = None,
+                 shadows: bool = True) -> None:
         self._wp, self._mjw = _import_warp()
         self._backend = backend
         self._model = backend.model
         self.width, self.height = width, height
+        self.shadows = shadows
         # Images go where the simulator's tensors live, so observations share a device.
         self.output_device = backend.device
         self._far = float(self._model.vis.map.zfar * self._model.stat.extent)
@@ -81,7 +83,7 @@ class WarpRenderer:
                     cam_active=list(cameras), render_skybox=self._has_skybox(),
                     # Rays are built per pixel in the kernel so a per-world field of view
                     # (camera variation) is honoured.
-                    use_precomputed_rays=False, use_shadows=True)
+                    use_precomputed_rays=False, use_shadows=self.shadows)
         return self._contexts[key]
 
     def _has_skybox(self) -> bool:
