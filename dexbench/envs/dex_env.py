@@ -297,9 +297,11 @@ class DexEnv:
         truncated = self.steps >= self.episode_steps
         info = {"success": success, "steps": self.steps.clone(),
                 "sim_warnings": self.sim.warning_counts()}
-        done = (terminated | truncated).nonzero().flatten()
-        obs = self.reset(done) if self.auto_reset and len(done) > 0 else self._observe()
-        return obs, reward, terminated, truncated, info
+        if self.auto_reset:  # finding the finished envs waits for the GPU: only then
+            done = (terminated | truncated).nonzero().flatten()
+            if len(done) > 0:
+                return self.reset(done), reward, terminated, truncated, info
+        return self._observe(), reward, terminated, truncated, info
 
     def _observe(self, reset_ids: torch.Tensor | None = None) -> Obs:
         out: Obs = {}

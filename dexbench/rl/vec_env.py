@@ -16,7 +16,6 @@ go to `curve` (success vs wall time).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
 import torch
 from rsl_rl.env import VecEnv
@@ -35,31 +34,33 @@ def actor_groups(env: DexEnv) -> tuple[str, ...]:
     return tuple(g for g in ACTOR_GROUPS if g in env.obs_shapes())
 
 
-@dataclass
 class Curve:
-    """Success rate and mean reward of the episodes finished in each iteration."""
+    """Success rate and mean reward of the episodes finished in each iteration.
 
-    start: float = field(default_factory=time.perf_counter)
-    points: list[dict] = field(default_factory=list)
-    _finished: int = 0
-    _successes: int = 0
-    _reward: float = 0.0
-    _steps: int = 0
+    Counts accumulate on the env's device and are read once per iteration (reading them
+    every step would make the CPU wait for the GPU each step).
+    """
+
+    def __init__(self, device: torch.device | str = "cpu") -> None:
+        self.start = time.perf_counter()
+        self.points: list[dict] = []
+        self._sums = torch.zeros(3, dtype=torch.float64, device=device)
+        self._steps = 0
 
     def add(self, done: torch.Tensor, success: torch.Tensor, reward: torch.Tensor) -> None:
-        self._finished += int(done.sum())
-        self._successes += int((done & success).sum())
-        self._reward += float(reward.mean())
+        self._sums += torch.stack([done.sum(), (done & success).sum(),
+                                   reward.double().mean()]).to(self._sums.dtype)
         self._steps += 1
 
     def close_iteration(self, env_steps: int) -> dict:
+        finished, successes, reward = self._sums.tolist()
         point = {"iteration": len(self.points), "wall_s": time.perf_counter() - self.start,
-                 "env_steps": env_steps, "episodes": self._finished,
-                 "success_rate": self._successes / self._finished if self._finished else None,
-                 "mean_reward": self._reward / max(self._steps, 1)}
+                 "env_steps": env_steps, "episodes": int(finished),
+                 "success_rate": successes / finished if finished else None,
+                 "mean_reward": reward / max(self._steps, 1)}
         self.points.append(point)
-        self._finished = self._successes = self._steps = 0
-        self._reward = 0.0
+        self._sums.zero_()
+        self._steps = 0
         return point
 
 
@@ -90,7 +91,7 @@ class RslVecEnv(VecEnv):
         self._prev_action = torch.zeros(env.num_envs, action_map.dim, device=env.device)
         self._solved = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
         self._obs = env.reset()
-        self.curve = Curve()
+        self.curve = Curve(env.device)
 
     @property
     def episode_length_buf(self) -> torch.Tensor:
