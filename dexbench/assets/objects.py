@@ -127,10 +127,14 @@ def add_capsule(spec: mujoco.MjSpec, name: str, radius: float = 0.02,
                 half_length: float = 0.03, mass: float = 0.1,
                 rgba: Sequence[float] = (0.6, 0.2, 0.8, 1.0),
                 friction: Sequence[float] = DEFAULT_FRICTION) -> ObjectInfo:
-    """A free capsule lying along its x axis (standing on a round end is unstable)."""
+    """A free capsule lying along its x axis (standing on a round end is unstable).
+
+    Like the ball it has rolling resistance (condim 6, `ROLLING_FRICTION`): without it a
+    capsule set down on a flat top keeps rolling sideways at the speed it was let go with.
+    """
     body = free_body(spec, name)
-    add_geom(body, f"{name}/geom", "capsule", [radius, half_length], rgba, mass, friction,
-             quat=ALONG_X)
+    add_geom(body, f"{name}/geom", "capsule", [radius, half_length], rgba, mass,
+             [*friction[:2], ROLLING_FRICTION], condim=6, quat=ALONG_X)
     return ObjectInfo(name, name, f"{name}/free", False, radius, half_length + radius,
                       axes={"long": (name, (1.0, 0.0, 0.0))})
 
