@@ -1,10 +1,10 @@
 """RSL-RL runner configuration from `conf/rl.yaml`'s `rl` section.
 
 Defaults follow the DexVerse authors' PPO set-up: 8 steps per env and iteration, actor and
-critic MLPs [1024, 1024, 512, 512] with ELU, clip 0.2, value coefficient 1.0, no entropy
-bonus, 5 epochs x 4 minibatches, learning rate 1e-3 with the adaptive schedule, gamma
-0.98, lambda 0.95, gradient norm 1.0; but an initial noise std of 0.5 (not 1.0) and a
-desired KL of 0.01 (not 0.001), which suit this repository's delta actions (see
+critic MLPs [1024, 1024, 512, 512] with ELU, initial noise std 1.0, clip 0.2, value
+coefficient 1.0, no entropy bonus, 5 epochs x 4 minibatches, learning rate 1e-3 with the
+adaptive schedule, gamma 0.98, lambda 0.95, gradient norm 1.0; but a desired KL of 0.01,
+not 0.001, under which the learning rate shrank until nothing was learned (see
 `docs/performance.md`). Observations are normalized by running statistics (their scales
 differ by orders of magnitude).
 """
