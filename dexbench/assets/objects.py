@@ -72,7 +72,7 @@ def mocap_body(spec: mujoco.MjSpec, name: str) -> mujoco.MjsBody:
     return spec.worldbody.add_body(name=name, mocap=True)
 
 
-ROLLING_FRICTION = 0.002  # m, balls
+ROLLING_FRICTION = 0.002  # m: balls and capsules roll to a stop
 
 
 def add_geom(body: mujoco.MjsBody, name: str, kind: str, size: Sequence[float],
