@@ -200,6 +200,7 @@ def test_rendering_restored_states_is_deterministic(demos, tmp_path):
     np.testing.assert_array_equal(frame["observation.depth.front"][0].numpy(),
                                   first["depth/front"][0].numpy())
     assert read_meta(out)["replay"]["history"] == 3
+    assert read_meta(out)["replay"]["shadows"] is True
 
 
 def test_resume_after_interruption_loses_and_repeats_nothing(tmp_path, monkeypatch, capsys):

@@ -76,6 +76,7 @@ def replay_states(source: pathlib.Path, out: pathlib.Path, obs: str | list[str],
         "history": resolve_preset(obs).history,
         "cameras": list(camera.cameras) if camera else [],
         "image_size": [camera.renderer.width, camera.renderer.height] if camera else None,
+        "shadows": camera.renderer.shadows if camera else None,
         "code_changes": changes}})
     publish(build, out, build.with_name(f".{out.name}.old"))
     return changes

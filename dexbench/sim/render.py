@@ -38,6 +38,7 @@ class CpuRenderer:
         self._backend = backend
         self._model = backend.model
         self.width, self.height = width, height
+        self.shadows = shadows
         try:
             self._renderer = mujoco.Renderer(self._model, height=height, width=width)
         except (mujoco.FatalError, RuntimeError) as err:
