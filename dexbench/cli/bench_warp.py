@@ -125,11 +125,11 @@ def bench_sim_warp(cfg: DictConfig) -> dict:
         result.update({"camera_num_envs": camera_envs,
                        "camera_resolution": [int(cfg.width), int(cfg.height)]})
         cam_steps = max(1, steps // 3)
+        kwargs.update(num_envs=camera_envs, obs=[*STATE_GROUPS, "rgb", "depth"],
+                      cameras=["front"], image_size=(int(cfg.width), int(cfg.height)),
+                      renderer="warp")
         for shadows, key in ((True, "camera"), (False, "camera_no_shadows")):
-            kwargs.update(num_envs=camera_envs, obs=[*STATE_GROUPS, "rgb", "depth"],
-                          cameras=["front"], image_size=(int(cfg.width), int(cfg.height)),
-                          renderer="warp", shadows=shadows)
-            cam = make_env(**kwargs)
+            cam = make_env(**{**kwargs, "shadows": shadows})
             cam_actions = _actions(cam, 16, float(cfg.action_noise), int(cfg.seed))
             cam_sps = camera_envs * cam_steps / _time_env(cam, cam_actions, cam_steps, warmup,
                                                           key.replace("_", " "))

@@ -31,6 +31,11 @@ class Embodiment:
     def action_dim(self) -> int:
         return len(self.actuators)
 
+    def hand_actuators(self, side: str) -> np.ndarray:
+        """Indices into `actuators` of one side's hand actuators, in action order."""
+        return np.array([i for i, a in enumerate(self.actuators)
+                         if a.startswith(f"{side}/hand/")], dtype=np.int64)
+
     @classmethod
     def resolve(cls, plan: EmbodimentPlan, model: mujoco.MjModel) -> Embodiment:
         """Read indices and ranges from `model`; every actuator must be the robot's."""

@@ -76,10 +76,9 @@ class ActionAdapter:
         for side, layout in emb.sides.items():
             mount = [emb.actuators.index(a) for a in emb.actuators
                      if a.startswith(f"{side}/") and joint_of.get(a) in layout.mount_joints]
-            hand = [emb.actuators.index(a) for a in emb.actuators
-                    if a.startswith(f"{side}/hand/")]
             joints = [joint_of[emb.actuators[i]] for i in mount]
-            self._sides[side] = (layout.palm_site, joints, np.array(mount), np.array(hand))
+            self._sides[side] = (layout.palm_site, joints, np.array(mount),
+                                 emb.hand_actuators(side))
         self._poses = emb.poses
         self._solution: dict[str, np.ndarray] = {}
 

@@ -143,8 +143,7 @@ class TwoItemsExpert:
         self._palm_site = model.site(env.embodiment.sides[side].palm_site).id
         self._dt = env.control_dt
         emb = env.embodiment
-        self._hand = np.array([i for i, a in enumerate(emb.actuators)
-                               if a.startswith(f"{side}/hand/")])
+        self._hand = emb.hand_actuators(side)
         self._open = emb.poses["open"][self._hand]
         self._power = emb.poses["power"][self._hand]
         self._closed = {name: emb.poses[ITEMS[name].synergy][self._hand] for name in self.names}

@@ -13,6 +13,7 @@ makes closing the hand around an object a likely event rather than a rare one.
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
@@ -47,13 +48,12 @@ class ActionMap:
         if missing or not self.synergies:
             raise ValueError(f"synergy actions need `open` and at least one synergy of "
                              f"{sorted(poses)}; got {list(self.synergies)}")
-        hands = sorted({a.split("/hand/")[0] for a in actuators if "/hand/" in a})
-        ids = {side: [i for i, a in enumerate(actuators) if a.startswith(f"{side}/hand/")]
-               for side in hands}
+        emb = env.embodiment
+        hands = [emb.hand_actuators(side) for side in sorted(emb.sides)]
         dev, dtype = self._low.device, self._low.dtype
-        self._mount = torch.tensor([i for i, a in enumerate(actuators) if "/hand/" not in a],
-                                   device=dev)
-        self._hands = [torch.tensor(ids[s], device=dev) for s in hands]
+        in_hand = np.isin(np.arange(len(actuators)), np.concatenate(hands))
+        self._mount = torch.as_tensor(np.flatnonzero(~in_hand), device=dev)
+        self._hands = [torch.as_tensor(ids, device=dev) for ids in hands]
         self._open = torch.as_tensor(poses["open"], dtype=dtype, device=dev)
         self._offsets = torch.stack([torch.as_tensor(poses[s], dtype=dtype, device=dev)
                                      - self._open for s in self.synergies])
