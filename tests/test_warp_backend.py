@@ -6,6 +6,7 @@ task is built and reused by every test.
 """
 
 import functools
+import warnings
 
 import numpy as np
 import pytest
@@ -117,3 +118,23 @@ def test_capacity_overflow_is_counted_per_world():
     assert int(sim.warning_counts()[0]) >= 1
     sim.reset(torch.tensor([0]))
     assert int(sim.warning_counts()[0]) == 0
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU")
+def test_gpu_step_blocks_the_host_only_to_check_actions():
+    """One host sync per step (the NaN check before stepping): the observation, reward and
+    success terms queue behind the physics graph instead of waiting for it."""
+    env = make_env("PickCube", num_envs=4, backend="warp")
+    env.reset()
+    action = env.home_action.repeat(4, 1)
+    env.step(action)  # captures the graph
+    torch.cuda.synchronize()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        torch.cuda.set_sync_debug_mode("warn")
+        try:
+            env.step(action)
+        finally:
+            torch.cuda.set_sync_debug_mode("default")
+    syncs = [str(w.message) for w in caught if "synchroniz" in str(w.message)]
+    assert len(syncs) == 1, syncs

@@ -126,8 +126,10 @@ class DexEnv:
         self.action_high = torch.tensor(emb.ctrl_range[:, 1], device=self.device)
         self.home_action = torch.tensor(emb.poses["home"], device=self.device)
         home = emb.home_qpos
-        self._home_qadr = torch.tensor([model.joint(j).qposadr[0] for j in home])
-        self._home_qval = torch.tensor(list(home.values()), dtype=torch.float64)
+        self._home_qadr = torch.tensor([model.joint(j).qposadr[0] for j in home],
+                                       device=self.device)
+        self._home_qval = torch.tensor(list(home.values()), dtype=torch.float64,
+                                       device=self.device)
         self._episode = np.zeros(num_envs, dtype=np.int64)
         self._keys = np.zeros((num_envs, 3), dtype=np.int64)
         self.steps = torch.zeros(num_envs, dtype=torch.long, device=self.device)
@@ -199,8 +201,7 @@ class DexEnv:
         self.sim.reset(ids)
         qpos = self._f["qpos"]
         dev_ids = ids.to(self.device)
-        qpos[dev_ids[:, None], self._home_qadr.to(self.device)] = self._home_qval.to(
-            self.device, qpos.dtype)
+        qpos[dev_ids[:, None], self._home_qadr] = self._home_qval.to(qpos.dtype)
         self._f["ctrl"][dev_ids] = self.home_action.to(qpos.dtype)
         sample = self.task.sample_reset(self._rngs(keys))
         model = self.scene.model

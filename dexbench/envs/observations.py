@@ -60,23 +60,25 @@ class ObservationTerms:
                  fields: dict[str, torch.Tensor]) -> None:
         model, emb = scene.model, scene.embodiment
         self._task, self._view, self._f = task, view, fields
+        # Indices on the fields' device (a host index into a GPU tensor blocks the CPU).
+        device = fields["qpos"].device
         joints = [model.joint(j) for j in emb.proprio_joints]
-        self._qadr = torch.tensor([j.qposadr[0] for j in joints])
-        self._dadr = torch.tensor([j.dofadr[0] for j in joints])
-        self._contact_adr = self._sensor_index(model, scene.contact_sensors)
+        self._qadr = torch.tensor([j.qposadr[0] for j in joints], device=device)
+        self._dadr = torch.tensor([j.dofadr[0] for j in joints], device=device)
+        self._contact_adr = self._sensor_index(model, scene.contact_sensors, device)
         self._link_adr = self._sensor_index(
             model, [f"{s}:{k}" for s in scene.link_sites
-                    for k in ("framepos", "framequat", "framelinvel", "frameangvel")])
+                    for k in ("framepos", "framequat", "framelinvel", "frameangvel")], device)
         per_side = [len(s.fingertip_bodies) for s in emb.sides.values()]
         self._contact_base = torch.tensor(
             [model.body(s.base_body).id for s, n in zip(emb.sides.values(), per_side, strict=True)
-             for _ in range(n)])
+             for _ in range(n)], device=device)
 
     @staticmethod
-    def _sensor_index(model, names) -> torch.Tensor:
+    def _sensor_index(model, names, device: torch.device) -> torch.Tensor:
         idx = [model.sensor_adr[model.sensor(n).id] + k for n in names
                for k in range(model.sensor_dim[model.sensor(n).id])]
-        return torch.tensor(idx, dtype=torch.long)
+        return torch.tensor(idx, dtype=torch.long, device=device)
 
     def compute(self, group: str, last_action: torch.Tensor) -> torch.Tensor | None:
         """One group as float32 (N, d), or None where the task has no such term."""

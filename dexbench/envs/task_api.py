@@ -48,8 +48,12 @@ class SceneView:
         self.hand_geom_thickness = torch.as_tensor(
             model.geom_aabb[hand_geoms, 3:].min(axis=1), device=device)
         self._ids: dict[tuple[str, str], int] = {}  # name lookups are slow; cache them
-        self.fingertip_ids = torch.tensor([model.site(s).id for s in fingertip_sites])
-        self.palm_ids = torch.tensor([model.site(s).id for s in palm_sites])
+        # Index tensors and constants live on the fields' device: a host index into a GPU
+        # tensor is a blocking copy that stalls the CPU until the queued physics is done.
+        self.fingertip_ids = torch.tensor([model.site(s).id for s in fingertip_sites],
+                                          device=device)
+        self.palm_ids = torch.tensor([model.site(s).id for s in palm_sites], device=device)
+        self._vectors: dict[tuple[float, ...], torch.Tensor] = {}
         self.initial_body_pos: dict[str, torch.Tensor] = {}
         self.goal: torch.Tensor | None = None
 
@@ -97,16 +101,23 @@ class SceneView:
         """
         return self._f["userdata"]
 
+    def _vector(self, local: tuple[float, float, float]) -> torch.Tensor:
+        """A body-frame constant as a tensor on the fields' device, made once."""
+        key = tuple(float(v) for v in local)
+        if key not in self._vectors:
+            xpos = self._f["xpos"]
+            self._vectors[key] = torch.tensor(key, dtype=xpos.dtype, device=xpos.device)
+        return self._vectors[key]
+
     def point_pos(self, body: str, local: tuple[float, float, float]) -> torch.Tensor:
         """(N, 3) world position of a point fixed in a body's frame."""
-        offset = torch.as_tensor(local, dtype=self._f["xpos"].dtype, device=self._f["xpos"].device)
-        return self.body_pos(body) + quat_apply(self.body_quat(body), offset.expand(
-            self.body_pos(body).shape))
+        pos = self.body_pos(body)
+        return pos + quat_apply(self.body_quat(body), self._vector(local).expand(pos.shape))
 
     def axis(self, body: str, local: tuple[float, float, float]) -> torch.Tensor:
         """(N, 3) world direction of an axis fixed in a body's frame."""
-        vec = torch.as_tensor(local, dtype=self._f["xpos"].dtype, device=self._f["xpos"].device)
-        return quat_apply(self.body_quat(body), vec.expand(self.body_pos(body).shape))
+        vec = self._vector(local).expand(self.body_pos(body).shape)
+        return quat_apply(self.body_quat(body), vec)
 
     def hand_geom_pos(self) -> torch.Tensor:
         """(N, G, 3) centres of every collision geom of every hand."""

@@ -112,6 +112,7 @@ class WarpBackend:
             self._stream = wp.get_stream() if self.graphs_enabled else None
         self._fields = {name: self._view(name) for name in (*STATE_FIELDS, *DERIVED_FIELDS)}
         self._mask_t = wp.to_torch(self._reset_mask)
+        self._warnings_t = wp.to_torch(self._warnings)
         self._graphs: dict[tuple, object] = {}
         self._batchable = {f.name for f in dataclasses.fields(mjw_types.Model)
                            if getattr(f.type, "shape", ())[:1] == ("*",)}
@@ -166,7 +167,7 @@ class WarpBackend:
     def warning_counts(self) -> torch.Tensor:
         """(num_envs,) control steps with a contact/constraint overflow or a non-finite
         state since each world's reset."""
-        return wp.to_torch(self._warnings).long()
+        return self._warnings_t.long()
 
     def _run(self, key: tuple | None, fn) -> None:
         """Run `fn`'s warp work ordered after the torch work queued so far and before the
@@ -225,7 +226,7 @@ class WarpBackend:
         self._mask_t.zero_()
         self._mask_t[ids] = True
         self._run(("reset",), lambda: mjw.reset_data(self.m, self.d, self._reset_mask))
-        wp.to_torch(self._warnings)[ids] = 0
+        self._warnings_t[ids] = 0
 
     def forward(self, env_ids: torch.Tensor, acceleration: bool = False) -> None:
         """Recompute derived fields (every world's: the others' come out unchanged)."""

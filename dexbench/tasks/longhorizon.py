@@ -63,4 +63,4 @@ class MakeCoffee(StageTask):
         stage = self.completed(view).clamp(max=2)
         targets = torch.stack([view.body_pos("milk"), view.body_pos("mug"),
                                view.point_pos(*self.objects["machine"].points["lever_tip"])], 1)
-        return targets[torch.arange(len(stage)), stage]
+        return targets[torch.arange(len(stage), device=stage.device), stage]

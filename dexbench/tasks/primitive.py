@@ -261,4 +261,4 @@ class GraspTwoItems(TabletopTask):
         pos = torch.stack([view.body_pos(self.objects[n].root) for n in self.candidates], 1)
         near = xy_dist(pos.flatten(0, 1), torch.zeros_like(pos.flatten(0, 1))).view(
             pos.shape[:2]).argmin(dim=1)
-        return pos[torch.arange(len(pos)), near]
+        return pos[torch.arange(len(pos), device=pos.device), near]
