@@ -136,5 +136,6 @@ def test_gpu_step_blocks_the_host_only_to_check_actions():
             env.step(action)
         finally:
             torch.cuda.set_sync_debug_mode("default")
-    syncs = [str(w.message) for w in caught if "synchroniz" in str(w.message)]
+    syncs = [str(w.message) for w in caught
+             if "called a synchronizing CUDA operation" in str(w.message)]
     assert len(syncs) == 1, syncs
