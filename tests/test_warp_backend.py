@@ -6,7 +6,6 @@ task is built and reused by every test.
 """
 
 import functools
-import warnings
 
 import numpy as np
 import pytest
@@ -121,21 +120,30 @@ def test_capacity_overflow_is_counted_per_world():
 
 
 @pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU")
-def test_gpu_step_blocks_the_host_only_to_check_actions():
-    """One host sync per step (the NaN check before stepping): the observation, reward and
-    success terms queue behind the physics graph instead of waiting for it."""
-    env = make_env("PickCube", num_envs=4, backend="warp")
+@pytest.mark.parametrize("camera", [False, True])
+def test_gpu_step_never_waits_for_the_gpu_after_checking_actions(camera, monkeypatch):
+    """The NaN check on the actions is a step's one host sync: everything after it (the
+    physics graph, observation, reward and success terms, the ray-traced images) is only
+    queued. A GPU stall queued right after the check must still be running when `step`
+    returns; any host read of GPU data (torch's or warp's) would have waited it out."""
+    groups = ["policy", "proprio", "contact", "state", "goal", "rgb", "depth"]
+    extra = dict(obs=groups, cameras=["front"], image_size=(32, 32),
+                 renderer="warp") if camera else {}
+    env = make_env("PickCube", num_envs=4, backend="warp", **extra)
     env.reset()
     action = env.home_action.repeat(4, 1)
-    env.step(action)  # captures the graph
+    env.step(action)  # captures the graphs
     torch.cuda.synchronize()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        torch.cuda.set_sync_debug_mode("warn")
-        try:
-            env.step(action)
-        finally:
-            torch.cuda.set_sync_debug_mode("default")
-    syncs = [str(w.message) for w in caught
-             if "called a synchronizing CUDA operation" in str(w.message)]
-    assert len(syncs) == 1, syncs
+    stalled = torch.cuda.Event()
+    check = env._validate
+
+    def check_then_stall(actions):
+        checked = check(actions)
+        torch.cuda._sleep(2_000_000_000)  # a second or so of GPU clock cycles
+        stalled.record()
+        return checked
+
+    monkeypatch.setattr(env, "_validate", check_then_stall)
+    env.step(action)
+    assert not stalled.query(), "step waited for the GPU after checking the actions"
+    torch.cuda.synchronize()

@@ -73,17 +73,20 @@ class WarpRenderer:
             self._d = self._mjw.make_data(self._model, nworld=backend.num_envs)
 
     def _context(self, cameras: tuple[str, ...], rgb: bool, depth: bool):
-        """One render context per camera set and output kind, built on first use."""
+        """One render context per camera set and output kind, built on first use, with
+        each camera's offsets into its image buffers (read once: a read from the GPU
+        would stall the host every frame)."""
         key = (cameras, rgb, depth)
         if key not in self._contexts:
             with self._wp.ScopedDevice(self.device):
-                self._contexts[key] = self._mjw.create_render_context(
+                rc = self._mjw.create_render_context(
                     self._model, nworld=self._backend.num_envs,
                     cam_res=(self.width, self.height), render_rgb=rgb, render_depth=depth,
                     cam_active=list(cameras), render_skybox=self._has_skybox(),
                     # Rays are built per pixel in the kernel so a per-world field of view
                     # (camera variation) is honoured.
                     use_precomputed_rays=False, use_shadows=self.shadows)
+            self._contexts[key] = (rc, rc.rgb_adr.numpy(), rc.depth_adr.numpy())
         return self._contexts[key]
 
     def _has_skybox(self) -> bool:
@@ -107,7 +110,7 @@ class WarpRenderer:
 
     def render(self, cameras: list[str], rgb: bool, depth: bool) -> dict[str, CameraFrames]:
         wp, mjw = self._wp, self._mjw
-        rc = self._context(tuple(cameras), rgb, depth)
+        rc, rgb_adr, depth_adr = self._context(tuple(cameras), rgb, depth)
         with wp.ScopedDevice(self.device):
             self._upload()
             mjw.refit_bvh(self._m, self._d, rc)
@@ -118,7 +121,6 @@ class WarpRenderer:
         n, h, w = self._backend.num_envs, self.height, self.width
         rgb_all = wp.to_torch(rc.rgb_data).view(torch.uint8) if rgb else None
         depth_all = wp.to_torch(rc.depth_data) if depth else None
-        rgb_adr, depth_adr = rc.rgb_adr.numpy(), rc.depth_adr.numpy()
         ids = [self._model.camera(c).id for c in cameras]
         fovy = self._fovy(n)
         out = {}
@@ -127,7 +129,7 @@ class WarpRenderer:
             if rgb:  # packed little-endian (b, g, r, a) bytes per pixel
                 start = 4 * int(rgb_adr[k])
                 packed = rgb_all[:, start:start + 4 * h * w].reshape(n, h, w, 4)
-                image = packed[..., [2, 1, 0]].to(self.output_device)
+                image = packed[..., :3].flip(-1).to(self.output_device)
             if depth:  # a miss reads 0: report the CPU renderer's far plane instead
                 start = int(depth_adr[k])
                 raw = depth_all[:, start:start + h * w].reshape(n, h, w)
