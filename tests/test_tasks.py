@@ -6,10 +6,12 @@ for each condition of the paper's success rule, a state violating only that cond
 
 import functools
 import math
+import traceback
 
 import numpy as np
 import pytest
 import torch
+from torch.overrides import TorchFunctionMode
 
 from dexbench.cli.docs import docs_path, tasks_markdown
 from dexbench.tasks.registry import TASKS, make_env
@@ -37,6 +39,55 @@ def test_task_builds_resets_without_penetration_and_runs(name, embodiment):
         obs, reward, *_ = small.step(action)
     assert all(torch.isfinite(v).all() for v in obs.values()) and torch.isfinite(reward).all()
     assert torch.isfinite(small.sim.field("qpos")).all()
+
+
+_FACTORIES = {torch.arange, torch.zeros, torch.ones, torch.full, torch.empty, torch.eye,
+              torch.linspace}
+_STEP_CODE = ("dexbench/tasks/", "dexbench/envs/task_api.py", "dexbench/envs/observations.py",
+              "dexbench/rl/rewards.py")
+
+
+class _HostTensorSpy(TorchFunctionMode):
+    """Records, in task and observation code, tensors made from host data, factories
+    without a device and indexing with lists or arrays. On the GPU backend each one is a
+    host-to-GPU copy that makes the step wait for its physics."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.found: list[str] = []
+
+    def __torch_function__(self, func, types, args=(), kwargs=None):
+        kwargs = kwargs or {}
+        if self._from_host(func, args, kwargs):
+            frames = [f for f in traceback.extract_stack()[:-1] if "dexbench/" in f.filename]
+            if frames and any(code in frames[-1].filename for code in _STEP_CODE):
+                self.found.append(f"{frames[-1].filename.split('dexbench/')[-1]}:"
+                                  f"{frames[-1].lineno} {frames[-1].line}")
+        return func(*args, **kwargs)
+
+    @staticmethod
+    def _from_host(func, args, kwargs) -> bool:
+        if func in (torch.tensor, torch.as_tensor):
+            return not isinstance(args[0], torch.Tensor)
+        if func in _FACTORIES:
+            return kwargs.get("device") is None
+        if func is torch.Tensor.__getitem__:
+            index = args[1] if isinstance(args[1], tuple) else (args[1],)
+            return any(isinstance(i, (list, np.ndarray)) for i in index)
+        return False
+
+
+@pytest.mark.parametrize("name", list(TASKS))
+def test_task_step_builds_no_tensors_from_host_data(name):
+    groups = ["policy", "proprio", "contact", "state", "privileged", "goal"]
+    env = make_env(name, num_envs=2, seed=0, obs=groups)
+    env.reset()
+    action = env.home_action.repeat(2, 1)
+    env.step(action)  # the first step may fill caches (made once, on the device)
+    with _HostTensorSpy() as spy:
+        for _ in range(3):
+            env.step(action)
+    assert not spy.found, sorted(set(spy.found))
 
 
 @functools.cache
