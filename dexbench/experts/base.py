@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
+import numpy as np
 import torch
 
 
@@ -18,3 +19,8 @@ class Expert(Protocol):
     def reset(self, env_ids: torch.Tensor) -> None: ...
 
     def act(self) -> torch.Tensor: ...
+
+
+def host_ids(env_ids: torch.Tensor | np.ndarray | list[int]) -> np.ndarray:
+    """Env indices as a numpy array: experts keep their per-env state on the host."""
+    return np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)

@@ -23,6 +23,7 @@ import torch
 from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
+from dexbench.experts.base import host_ids
 from dexbench.experts.motion import palm_down, step_towards
 from dexbench.tasks.predicates import tilt_deg
 
@@ -113,7 +114,7 @@ class TwoHandLiftExpert:
         return {s: 1.0 if y * ref >= 0 else -1.0 for s, y in thumb_y.items()}
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         for side, mirror in self._mirror(int(ids[0])).items():
             self.offset[side] = self._offset * [1.0, mirror, 1.0]
             pos, rot = self._palm(side)

@@ -26,6 +26,7 @@ from dexbench.experts.adapter import (
     palm_and_finger_sites,
     tips_in_palm_frame,
 )
+from dexbench.experts.base import host_ids
 from dexbench.experts.grasp import GraspExpert, GraspPlan, Phase
 from dexbench.experts.motion import palm_down, pitch_down, step_towards
 from dexbench.experts.press import PressExpert, PressPlan
@@ -126,7 +127,7 @@ class ReachExpert:
         self.tips = np.zeros((n, 3))  # finger tips in the hand frame
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.tips[ids] = tips[ids].mean(axis=1)

@@ -20,6 +20,7 @@ from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.rotations import quat_apply
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
+from dexbench.experts.base import host_ids
 from dexbench.experts.motion import (
     HANDSHAKE_ROT,
     body_yaw,
@@ -134,7 +135,7 @@ class GraspExpert:
         return (pos + quat_apply(quat, offset)).numpy(), quat.numpy()
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         pos, rot = self._palm()
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0

@@ -17,6 +17,7 @@ import torch
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
+from dexbench.experts.base import host_ids
 from dexbench.experts.motion import step_towards, turned
 
 SPEED = 0.15  # m/s while lining up
@@ -70,7 +71,7 @@ class InsertExpert:
         return site_pose(self.env, self._palm)
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         pos, rot = self._palm_pose()
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pushing[ids] = False

@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.base import host_ids
 from dexbench.experts.grasp import GraspExpert, GraspPlan, Phase, task_goal
 from dexbench.experts.motion import body_yaw, turned
 
@@ -90,7 +91,7 @@ class PourExpert:
         return self.grasp.phase
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         self._angle[ids] = 0.0
         self.grasp.reset(env_ids)
 

@@ -15,6 +15,7 @@ import torch
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, tips_in_palm_frame
+from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 
 HOVER = 0.08  # m above the point before pressing
@@ -53,7 +54,7 @@ class PressExpert:
         self.pressing = np.zeros(n, dtype=bool)
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         if self.plan.with_fingers:

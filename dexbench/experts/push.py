@@ -27,6 +27,7 @@ from dexbench.experts.adapter import (
     palm_and_finger_sites,
     tips_in_palm_frame,
 )
+from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
 
 SPEED = 0.4  # m/s in the air
@@ -142,7 +143,7 @@ class PushExpert:
         self.drop = np.zeros(n)  # m the leading fingertip is above the lowest one
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         palm = pos[ids]
         self.offsets[ids] = tips[ids]

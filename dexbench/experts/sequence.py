@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.base import Expert
+from dexbench.experts.base import Expert, host_ids
 
 Subgoal = Callable[[DexEnv], torch.Tensor]
 
@@ -28,7 +28,7 @@ class SequenceExpert:
         self.stage = np.zeros(env.num_envs, dtype=np.int64)
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         self.stage[ids] = 0
         self.steps[0][0].reset(torch.as_tensor(ids))
 

@@ -21,6 +21,7 @@ from dexbench.experts.adapter import (
     palm_and_finger_sites,
     tips_in_palm_frame,
 )
+from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 
 SPEED = 0.4  # m/s in the air
@@ -64,7 +65,7 @@ class TurnExpert:
         self.stage = np.zeros(n, dtype=np.int64)  # 0 hover, 1 down beside, 2 push
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pads[ids] = tips[ids].mean(axis=1)

@@ -30,6 +30,7 @@ from dexbench.embodiments.hand_geometry import thumb_actuators
 from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
+from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, step_towards, wrap, yawed
 
 
@@ -186,7 +187,7 @@ class TwoItemsExpert:
         return pos, yaw
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        ids = np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+        ids = host_ids(env_ids)
         pos, rot = self._palm()
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.stage[ids], self.timer[ids], self.closure[ids] = Stage.REACH, 0.0, 0.0
