@@ -9,6 +9,7 @@ the same predicate runs on the CPU and the GPU backends.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Hashable
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -49,11 +50,12 @@ class SceneView:
             model.geom_aabb[hand_geoms, 3:].min(axis=1), device=device)
         self._ids: dict[tuple[str, str], int] = {}  # name lookups are slow; cache them
         # Index tensors and constants live on the fields' device: a host index into a GPU
-        # tensor is a blocking copy that stalls the CPU until the queued physics is done.
+        # tensor is a blocking copy that stalls the CPU until the queued physics is done
+        # (constants: `constant`).
         self.fingertip_ids = torch.tensor([model.site(s).id for s in fingertip_sites],
                                           device=device)
         self.palm_ids = torch.tensor([model.site(s).id for s in palm_sites], device=device)
-        self._vectors: dict[tuple[float, ...], torch.Tensor] = {}
+        self._constants: dict[Hashable, torch.Tensor] = {}
         self.initial_body_pos: dict[str, torch.Tensor] = {}
         self.goal: torch.Tensor | None = None
 
@@ -101,13 +103,18 @@ class SceneView:
         """
         return self._f["userdata"]
 
-    def _vector(self, local: tuple[float, float, float]) -> torch.Tensor:
-        """A body-frame constant as a tensor on the fields' device, made once."""
-        key = tuple(float(v) for v in local)
-        if key not in self._vectors:
+    def constant(self, key: Hashable, values) -> torch.Tensor:
+        """`values` (a tensor keeps its dtype; numbers get the fields' dtype) as a tensor
+        on the fields' device, made on the first call with `key`: a task's fixed
+        geometry, copied to the GPU once rather than every step."""
+        if key not in self._constants:
             xpos = self._f["xpos"]
-            self._vectors[key] = torch.tensor(key, dtype=xpos.dtype, device=xpos.device)
-        return self._vectors[key]
+            dtype = values.dtype if isinstance(values, torch.Tensor) else xpos.dtype
+            self._constants[key] = torch.as_tensor(values, dtype=dtype, device=xpos.device)
+        return self._constants[key]
+
+    def _vector(self, local: tuple[float, float, float]) -> torch.Tensor:
+        return self.constant(("body-frame", *map(float, local)), local)
 
     def point_pos(self, body: str, local: tuple[float, float, float]) -> torch.Tensor:
         """(N, 3) world position of a point fixed in a body's frame."""

@@ -51,8 +51,8 @@ class ActionMap:
         emb = env.embodiment
         hands = [emb.hand_actuators(side) for side in sorted(emb.sides)]
         dev, dtype = self._low.device, self._low.dtype
-        in_hand = np.isin(np.arange(len(actuators)), np.concatenate(hands))
-        self._mount = torch.as_tensor(np.flatnonzero(~in_hand), device=dev)
+        mount = np.setdiff1d(np.arange(len(actuators)), np.concatenate(hands))
+        self._mount = torch.as_tensor(mount, device=dev)
         self._hands = [torch.as_tensor(ids, device=dev) for ids in hands]
         self._open = torch.as_tensor(poses["open"], dtype=dtype, device=dev)
         self._offsets = torch.stack([torch.as_tensor(poses[s], dtype=dtype, device=dev)

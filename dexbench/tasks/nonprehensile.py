@@ -88,13 +88,12 @@ class PushT(TabletopTask):
     def overlap(self, view: SceneView) -> torch.Tensor:
         """(N,) fraction of the goal footprint covered by the T."""
         goal = view.goal
-        if self.grid.device != goal.device:  # moved once: a per-step copy would block
-            self.rects, self.grid = self.rects.to(goal.device), self.grid.to(goal.device)
-        grid = self.grid[None].expand(len(goal), -1, -1)
+        grid = view.constant("PushT/grid", self.grid)[None].expand(len(goal), -1, -1)
         world = _rotate2(grid, goal[:, 2]) + goal[:, None, :2]
         tee = view.body_pos("tee")[:, None, :2]
         local = _rotate2(world - tee, -yaw_of(view.body_quat("tee")))
-        return self._inside(local, self.rects).to(goal.dtype).mean(dim=1)
+        rects = view.constant("PushT/rects", self.rects)
+        return self._inside(local, rects).to(goal.dtype).mean(dim=1)
 
     def success(self, view: SceneView) -> torch.Tensor:
         return self.overlap(view) >= self.overlap_threshold
