@@ -62,10 +62,10 @@ def trained(demos, tmp_path_factory) -> dict[str, pathlib.Path]:
 
 def _rollout(kind: str, checkpoint: pathlib.Path, steps: int) -> list[torch.Tensor]:
     module = policy_module(kind)
-    spec = module.spec(checkpoint)
+    spec = module.spec(checkpoint, {})
     env = make_env(spec.task, spec.embodiment, num_envs=3, seed=11, obs=spec.obs, nthread=1,
                    **(CAMERA if kind == "dp3" else {}))
-    policy = module.build(checkpoint, env, "cpu")
+    policy = module.build(checkpoint, env, "cpu", {})
     obs = env.reset()
     policy.reset(torch.arange(3))
     actions = []
@@ -114,9 +114,9 @@ def test_checkpoint_refuses_another_embodiment(trained):
     env = make_env("PickCube", "floating_allegro", num_envs=1, nthread=1)
     with pytest.raises(ActionLayoutError, match=r"embodiment 'floating_shadow'.*"
                        r"embodiment=floating_shadow or retrain"):
-        policy_module("dp").build(trained["dp"], env, "cpu")
+        policy_module("dp").build(trained["dp"], env, "cpu", {})
     with pytest.raises(CheckpointError, match="pass policy=dp"):
-        policy_module("dp3").spec(trained["dp"])
+        policy_module("dp3").spec(trained["dp"], {})
 
 
 def test_missing_dataset_names_the_collect_command(tmp_path):

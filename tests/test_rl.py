@@ -108,10 +108,10 @@ def test_ppo_smoke_run_and_rl_policy(tmp_path, monkeypatch):
     assert {"model_0.pt", "model_1.pt", "policy.json", "curve.png", "curve.jsonl",
             "metrics.json", "config.yaml"} <= {p.name for p in run.iterdir()}
     assert len((run / "curve.jsonl").read_text().splitlines()) == 2
-    spec = rl_policy.spec(str(run))
+    spec = rl_policy.spec(str(run), {})
     assert spec.task == "PickCube" and "privileged" not in spec.obs
     env = make_env("PickCube", num_envs=2, obs=list(spec.obs), nthread=1)
-    policy = rl_policy.build(str(run / "model_1.pt"), env, "cpu")
+    policy = rl_policy.build(str(run / "model_1.pt"), env, "cpu", {})
     obs = env.reset()
     action = policy.act(obs)
     assert action.shape == (2, env.action_dim)
@@ -125,6 +125,6 @@ def test_ppo_smoke_run_and_rl_policy(tmp_path, monkeypatch):
 
 def test_rl_checkpoint_errors_say_what_to_pass(tmp_path):
     with pytest.raises(rl_policy.CheckpointError, match="checkpoint="):
-        rl_policy.spec(None)
+        rl_policy.spec(None, {})
     with pytest.raises(rl_policy.CheckpointError, match=r"policy\.json"):
-        rl_policy.spec(str(tmp_path))
+        rl_policy.spec(str(tmp_path), {})

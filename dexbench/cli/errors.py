@@ -11,11 +11,12 @@ from dexbench.data.meta import DatasetError
 from dexbench.embodiments.builder import UnknownEmbodimentError
 from dexbench.envs.dex_env import InvalidActionError
 from dexbench.envs.scene import InfeasibleTaskError
+from dexbench.policies.vla_adapters.chunks import RemotePolicyError
 from dexbench.tasks.registry import UnknownTaskError
 
 USER_ERRORS = (ConfigError, UnknownTaskError, UnknownEmbodimentError, InfeasibleTaskError,
                MissingRobotModelError, ChecksumMismatchError, InvalidActionError,
-               DatasetError, NotImplementedError)
+               DatasetError, RemotePolicyError, NotImplementedError)
 
 
 def run_cli(main: Callable[[list[str]], int]) -> None:

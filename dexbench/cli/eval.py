@@ -44,7 +44,7 @@ from dexbench.eval.tables import write_tables
 from dexbench.eval.throughput import episodes_per_minute, model_module, untrained_checkpoint
 from dexbench.eval.video import EpisodeCamera, EpisodeVideos
 from dexbench.policies.common.protocol import Policy, PolicySpec, check_action_layout
-from dexbench.policies.registry import policy_module
+from dexbench.policies.registry import WITHOUT_CHECKPOINT, policy_module
 from dexbench.tasks.registry import TASKS, make_env
 
 RUNTIME_KEYS = ("num_envs", "device", "progress", "sim.nthread", "skip_missing")
@@ -142,6 +142,15 @@ def policy_kind(cfg: DictConfig) -> str:
     return str(cfg.policy.name if isinstance(cfg.policy, DictConfig) else cfg.policy)
 
 
+def policy_options(cfg: DictConfig) -> dict:
+    """The kind's settings from conf/policy/<kind>.yaml (with overrides), for its adapter."""
+    if not isinstance(cfg.policy, DictConfig):
+        return {}
+    options = OmegaConf.to_container(cfg.policy, resolve=True)
+    options.pop("name", None)
+    return options
+
+
 def _device(name: str) -> str:
     if name == "auto":
         return "cuda" if torch.cuda.is_available() else "cpu"
@@ -156,7 +165,8 @@ def plan_tasks(cfg: DictConfig) -> tuple[list[TaskPlan], dict[str, str]]:
     plans, problems = [], {}
     for category, tasks in groups.items():
         for task in tasks:
-            plan = plan_task(task, category, kind, cfg.checkpoint, cfg.embodiment)
+            plan = plan_task(task, category, kind, cfg.checkpoint, cfg.embodiment,
+                             policy_options(cfg))
             if isinstance(plan, TaskPlan):
                 plans.append(plan)
             else:
@@ -178,6 +188,8 @@ def build_env(cfg: DictConfig, plan: TaskPlan, num_envs: int) -> DexEnv:
     kwargs = env_kwargs(OmegaConf.merge(cfg, {"num_envs": num_envs}))
     obs = plan.spec.obs if isinstance(plan.spec.obs, str) else list(plan.spec.obs)
     kwargs.update(task=plan.task, embodiment=plan.embodiment, obs=obs)
+    if plan.spec.cameras is not None:
+        kwargs.update(cameras=list(plan.spec.cameras))
     env = make_env(**kwargs)
     if cfg.horizon is not None:
         env.episode_steps = int(cfg.horizon)
@@ -185,7 +197,8 @@ def build_env(cfg: DictConfig, plan: TaskPlan, num_envs: int) -> DexEnv:
 
 
 def build_policy(cfg: DictConfig, plan: TaskPlan, env: DexEnv) -> Policy:
-    policy = policy_module(policy_kind(cfg)).build(plan.checkpoint, env, _device(cfg.device))
+    policy = policy_module(policy_kind(cfg)).build(plan.checkpoint, env, _device(cfg.device),
+                                                   policy_options(cfg))
     check_action_layout(policy.spec, env.embodiment.actuators)
     return policy
 
@@ -324,7 +337,7 @@ def bench_eval(argv: list[str]) -> dict:
         raise EvalError("num_envs, episodes, sequential_episodes and horizon must be >= 1")
     run_dir = new_run_dir("bench", f"eval-{kind}-{cfg.task}", cfg)
     checkpoint = cfg.checkpoint
-    if checkpoint is None and kind != "expert":
+    if checkpoint is None and kind not in WITHOUT_CHECKPOINT:
         task = str(cfg.task)
         if task not in TASKS:
             raise EvalError(f"task={task} is not implemented (`python -m dexbench list tasks`)")
@@ -336,7 +349,7 @@ def bench_eval(argv: list[str]) -> dict:
         probe = build_env(cfg, TaskPlan(task, "", embodiment, None, spec), 2)
         checkpoint = str(untrained_checkpoint(kind, OmegaConf.to_container(cfg.policy), probe,
                                               run_dir / "untrained.pt"))
-    plan = plan_task(str(cfg.task), "", kind, checkpoint, cfg.embodiment)
+    plan = plan_task(str(cfg.task), "", kind, checkpoint, cfg.embodiment, policy_options(cfg))
     if not isinstance(plan, TaskPlan):
         raise EvalError(f"{cfg.task}: {plan}")
     rates = {}

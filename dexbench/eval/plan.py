@@ -8,7 +8,9 @@ half way for a reason known at the start.
 from __future__ import annotations
 
 import pathlib
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from dexbench.embodiments.builder import parse_embodiment
 from dexbench.policies.common.protocol import PolicySpec
@@ -43,14 +45,14 @@ def _arity(name: str) -> str:
 
 
 def plan_task(task: str, category: str, kind: str, checkpoint: str | None,
-              embodiment: str | None) -> TaskPlan | str:
+              embodiment: str | None, options: Mapping[str, Any]) -> TaskPlan | str:
     """The plan for policy `kind` on `task`, or the reason it cannot be evaluated."""
     if task not in TASKS:
         return "not implemented yet (`python -m dexbench list tasks` lists those that are)"
     cls = TASKS[task]
     ckpt = checkpoint_for(checkpoint, task, embodiment or cls.default_embodiment, kind)
     try:
-        spec = policy_module(kind).spec(ckpt)
+        spec = policy_module(kind).spec(ckpt, options)
     except (ValueError, OSError) as err:
         return f"policy cannot be loaded: {err}"
     if spec.task is not None and spec.task != task:

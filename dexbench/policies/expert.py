@@ -7,6 +7,9 @@ checkpoint.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import torch
 
 from dexbench.envs.dex_env import DexEnv
@@ -14,7 +17,7 @@ from dexbench.experts import make_expert
 from dexbench.policies.common.protocol import PolicySpec
 
 
-def spec(checkpoint: str | None) -> PolicySpec:
+def spec(checkpoint: str | None, options: Mapping[str, Any]) -> PolicySpec:
     if checkpoint is not None:
         raise ValueError(f"policy=expert takes no checkpoint (got {checkpoint!r})")
     return PolicySpec(obs="state")
@@ -35,6 +38,7 @@ class ExpertPolicy:
         return self._expert.act()
 
 
-def build(checkpoint: str | None, env: DexEnv, device: torch.device | str) -> ExpertPolicy:
-    spec(checkpoint)
+def build(checkpoint: str | None, env: DexEnv, device: torch.device | str,
+          options: Mapping[str, Any]) -> ExpertPolicy:
+    spec(checkpoint, options)
     return ExpertPolicy(env)

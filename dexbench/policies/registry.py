@@ -1,8 +1,10 @@
 """Policy kinds by name, imported lazily so that a missing optional extra stays local.
 
-Each kind's module provides `spec(checkpoint) -> PolicySpec` (read before the env is
-built, so the env gets the right observation preset) and
-`build(checkpoint, env, device) -> Policy`.
+Each kind's module provides `spec(checkpoint, options) -> PolicySpec` (read before the
+env is built, so the env gets the right observation preset and cameras) and
+`build(checkpoint, env, device, options) -> Policy`; `options` is the kind's
+`conf/policy/<kind>.yaml` (with overrides) as a dict, which checkpointed kinds ignore
+(their checkpoint holds what they need).
 """
 
 from __future__ import annotations
@@ -14,8 +16,11 @@ KINDS = {
     "dp": "dexbench.policies.dp.policy",
     "dp3": "dexbench.policies.dp3.policy",
     "expert": "dexbench.policies.expert",
+    "openpi": "dexbench.policies.vla_adapters.openpi",
     "rl": "dexbench.policies.rl",
 }
+# Kinds that load no checkpoint here (scripted, or served by another program).
+WITHOUT_CHECKPOINT = frozenset({"expert", "openpi"})
 
 
 def policy_module(kind: str) -> ModuleType:

@@ -11,6 +11,8 @@ from __future__ import annotations
 import json
 import pathlib
 import re
+from collections.abc import Mapping
+from typing import Any
 
 import torch
 from rsl_rl.models import MLPModel
@@ -48,7 +50,7 @@ def resolve(checkpoint: str | None) -> tuple[pathlib.Path, dict]:
     return path, json.loads(meta_path.read_text())
 
 
-def spec(checkpoint: str | None) -> PolicySpec:
+def spec(checkpoint: str | None, options: Mapping[str, Any]) -> PolicySpec:
     _, meta = resolve(checkpoint)
     return PolicySpec(obs=tuple(meta["actor_groups"]), task=meta["task"],
                       embodiment=meta["embodiment"], action_layout=tuple(meta["actuators"]))
@@ -91,6 +93,7 @@ class RlPolicy:
         return self._map.targets(obs["policy"].to(self._map.device), action)
 
 
-def build(checkpoint: str | None, env: DexEnv, device: torch.device | str) -> RlPolicy:
+def build(checkpoint: str | None, env: DexEnv, device: torch.device | str,
+          options: Mapping[str, Any]) -> RlPolicy:
     model_path, meta = resolve(checkpoint)
     return RlPolicy(model_path, meta, env, device)

@@ -19,13 +19,15 @@ class PolicySpec:
 
     `obs` is the observation preset (or group list) to build the env with; `task` and
     `embodiment` are those it was trained on (None: any); `action_layout` the ordered
-    actuator names its actions follow (None: any), checked against the env's.
+    actuator names its actions follow (None: any), checked against the env's; `cameras`
+    the cameras its image groups come from (None: those the env config names).
     """
 
     obs: str | tuple[str, ...]
     task: str | None = None
     embodiment: str | None = None
     action_layout: tuple[str, ...] | None = None
+    cameras: tuple[str, ...] | None = None
 
 
 class Policy(Protocol):

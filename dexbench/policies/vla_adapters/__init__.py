@@ -1,0 +1,7 @@
+"""Adapters that run vision-language-action models served elsewhere as dexbench policies.
+
+A VLA runs in its own environment (its own Python, CUDA and weights), often on another
+machine; the adapter speaks the model server's wire protocol, turns the batched env's
+observations into one request per environment and plays back the returned action
+chunks. `openpi` serves pi0 / pi0.5 over a websocket.
+"""
