@@ -1,7 +1,9 @@
-"""VLA adapters: the msgpack-numpy wire format, image resizing, and `policy=openpi` against
-an in-process server speaking openpi's websocket protocol (requests, chunk playback,
-re-planning after resets, the evaluator end to end, and each failure's message)."""
+"""VLA adapters: the msgpack-numpy and json-numpy wire formats, image resizing,
+`policy=openpi` against an in-process server speaking openpi's websocket protocol
+(requests, chunk playback, re-planning after resets, the evaluator end to end, each
+failure's message) and `policy=openvla_oft` against an in-process REST server."""
 
+import http.server
 import json
 import pathlib
 import threading
@@ -15,13 +17,20 @@ from websockets.sync.server import serve
 
 from dexbench import make_env
 from dexbench.cli import eval as eval_cli
-from dexbench.policies.vla_adapters import msgpack_numpy, openpi
+from dexbench.policies.vla_adapters import json_numpy, msgpack_numpy, openpi, openvla_oft
 from dexbench.policies.vla_adapters.chunks import RemotePolicyError
 from dexbench.policies.vla_adapters.images import resize_with_pad
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-OPTIONS = {k: v for k, v in yaml.safe_load(
-    (REPO / "conf/policy/openpi.yaml").read_text()).items() if k != "name"}
+
+
+def _yaml_options(kind: str) -> dict:
+    return {k: v for k, v in yaml.safe_load(
+        (REPO / f"conf/policy/{kind}.yaml").read_text()).items() if k != "name"}
+
+
+OPTIONS = _yaml_options("openpi")
+OFT_OPTIONS = _yaml_options("openvla_oft")
 SIZE = 32  # camera and request image size in these tests
 
 
@@ -198,3 +207,105 @@ def test_openpi_unreachable_server_and_bad_settings():
         openpi.spec(None, {**OPTIONS, "image_keys": ["observation/image"]})
     with pytest.raises(ValueError, match="unknown \\['colour'\\]"):
         openpi.spec(None, {**OPTIONS, "colour": 1})
+
+
+@pytest.mark.parametrize("value", [
+    np.arange(6, dtype=np.float32).reshape(2, 3), np.array([[1, 2]], dtype=np.uint8),
+    np.asfortranarray(np.arange(12, dtype=np.int16).reshape(3, 4)), np.float32(2.5),
+])
+def test_json_numpy_round_trips_in_the_packages_layout(value):
+    text = json_numpy.dumps({"x": value, "n": 3})
+    layout = json.loads(text)["x"]
+    assert set(layout) == {"__numpy__", "dtype", "shape"}
+    assert layout["dtype"] == value.dtype.str and layout["shape"] == list(np.shape(value))
+    back = json_numpy.loads(text)
+    assert back["n"] == 3 and back["x"].dtype == value.dtype
+    np.testing.assert_array_equal(back["x"], value)
+
+
+class FakeOftServer:
+    """A REST server answering POST /act like OpenVLA-OFT's deploy script."""
+
+    def __init__(self) -> None:
+        self.requests: list[dict] = []
+        self.reply = lambda request: [np.zeros(26, np.float32)] * 8
+        outer = self
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            def do_POST(self) -> None:
+                if self.path != "/act":
+                    self.send_error(404)
+                    return
+                request = json_numpy.loads(self.rfile.read(int(self.headers["Content-Length"])))
+                outer.requests.append(request)
+                answer = outer.reply(request)
+                body = (json.dumps(answer) if isinstance(answer, str)
+                        else json_numpy.dumps(answer)).encode()
+                self.send_response(200)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(body)))
+                self.end_headers()
+                self.wfile.write(body)
+
+            def log_message(self, *args) -> None:
+                """Quiet."""
+
+        self._server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        self.port = self._server.server_address[1]
+        threading.Thread(target=self._server.serve_forever, daemon=True).start()
+
+    def close(self) -> None:
+        self._server.shutdown()
+        self._server.server_close()
+
+
+@pytest.fixture
+def oft_server():
+    srv = FakeOftServer()
+    yield srv
+    srv.close()
+
+
+def _oft_options(server: FakeOftServer, **overrides) -> dict:
+    return {**OFT_OPTIONS, "host": "127.0.0.1", "port": server.port, "image_size": SIZE,
+            "timeout_s": 10, **overrides}
+
+
+def test_openvla_oft_requests_and_chunk_playback(oft_server):
+    env = _env(2)
+    chunk = env.home_action.numpy()[None] + 0.01 * np.arange(8, dtype=np.float32)[:, None]
+    oft_server.reply = lambda request: list(chunk)
+    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server))
+    obs = first = env.reset()
+    for step in range(9):
+        action = policy.act(obs)
+        np.testing.assert_allclose(action.numpy(), np.stack([chunk[step % 8]] * 2), atol=1e-6)
+        obs, *_ = env.step(action)
+    assert len(oft_server.requests) == 4  # each env at steps 0 and 8
+    request = oft_server.requests[0]
+    assert set(request) == {"full_image", "wrist_image", "state", "instruction"}
+    assert request["instruction"] == env.task.instruction
+    assert request["full_image"].shape == (SIZE, SIZE, 3)
+    assert request["full_image"].dtype == np.uint8
+    np.testing.assert_array_equal(request["state"], first["proprio"][0].numpy())
+
+
+def test_openvla_oft_double_encoded_answer_and_failures(oft_server):
+    env = _env(1)
+    oft_server.reply = lambda request: json_numpy.dumps([np.ones(26, np.float32)] * 8)
+    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server))
+    assert (policy.act(env.reset()).numpy() == 1).all()
+    oft_server.reply = lambda request: "error"
+    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server))
+    with pytest.raises(RemotePolicyError, match="failed on the request"):
+        policy.act(env.reset())
+    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server, route="/predict"))
+    with pytest.raises(RemotePolicyError, match="HTTP 404"):
+        policy.act(env.reset())
+    closed = FakeOftServer()
+    closed.close()
+    policy = openvla_oft.build(None, env, "cpu", _oft_options(closed))
+    with pytest.raises(RemotePolicyError, match="no OpenVLA-OFT server answered"):
+        policy.act(env.reset())
+    with pytest.raises(ValueError, match="takes no checkpoint"):
+        openvla_oft.spec("model.pt", OFT_OPTIONS)

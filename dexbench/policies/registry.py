@@ -17,10 +17,11 @@ KINDS = {
     "dp3": "dexbench.policies.dp3.policy",
     "expert": "dexbench.policies.expert",
     "openpi": "dexbench.policies.vla_adapters.openpi",
+    "openvla_oft": "dexbench.policies.vla_adapters.openvla_oft",
     "rl": "dexbench.policies.rl",
 }
 # Kinds that load no checkpoint here (scripted, or served by another program).
-WITHOUT_CHECKPOINT = frozenset({"expert", "openpi"})
+WITHOUT_CHECKPOINT = frozenset({"expert", "openpi", "openvla_oft"})
 
 
 def policy_module(kind: str) -> ModuleType:

@@ -3,5 +3,6 @@
 A VLA runs in its own environment (its own Python, CUDA and weights), often on another
 machine; the adapter speaks the model server's wire protocol, turns the batched env's
 observations into one request per environment and plays back the returned action
-chunks. `openpi` serves pi0 / pi0.5 over a websocket.
+chunks. `openpi` serves pi0 / pi0.5 over a websocket, `openvla_oft` OpenVLA-OFT over
+HTTP.
 """

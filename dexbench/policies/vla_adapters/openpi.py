@@ -6,10 +6,8 @@ observation dict packed with msgpack (NumPy arrays as `msgpack_numpy` lays them 
 and the answer holds `actions`, a chunk (H, action_dim) of absolute joint targets in the
 embodiment's actuator order. A text frame instead of a binary one is the server's error.
 
-The request: each camera of `cameras` under its key of `image_keys` (uint8, H x W x 3,
-resized with padding to `image_size`), the robot joint positions under `state_key`
-(unless null) and the task's language instruction under `prompt_key`. Keys follow the
-server's input transform; the defaults match openpi's single-arm examples.
+The request is `served.request_builder`'s; the default keys match openpi's single-arm
+examples (follow your server's input transform).
 """
 
 from __future__ import annotations
@@ -28,38 +26,14 @@ from dexbench.envs.dex_env import DexEnv
 from dexbench.policies.common.protocol import PolicySpec
 from dexbench.policies.vla_adapters import msgpack_numpy
 from dexbench.policies.vla_adapters.chunks import ChunkQueuePolicy, RemotePolicyError
-from dexbench.policies.vla_adapters.images import resize_with_pad
+from dexbench.policies.vla_adapters.served import COMMON, chunk_policy, served_spec, settings
 
-# The settings of conf/policy/openpi.yaml (where their defaults and meanings live).
-SETTINGS = ("host", "port", "api_key", "cameras", "image_keys", "image_size", "state_key",
-            "prompt_key", "prompt", "actions_key", "replan_steps", "timeout_s")
-
-
-def settings(options: Mapping[str, Any]) -> dict[str, Any]:
-    """The adapter's settings from `options` (conf/policy/openpi.yaml), checked before any
-    env is built."""
-    unknown = sorted(set(options) - set(SETTINGS))
-    missing = [k for k in SETTINGS if k not in options]
-    if unknown or missing:
-        raise ValueError(f"policy=openpi settings: unknown {unknown}, missing {missing}; "
-                         f"it takes {', '.join(SETTINGS)} (conf/policy/openpi.yaml)")
-    s = dict(options)
-    cameras, keys = list(s["cameras"] or []), list(s["image_keys"] or [])
-    if not cameras or len(cameras) != len(keys):
-        raise ValueError(f"policy.cameras ({len(cameras)}) and policy.image_keys "
-                         f"({len(keys)}) must name the same number of images, at least one")
-    if int(s["image_size"]) < 1 or int(s["replan_steps"]) < 1 or float(s["timeout_s"]) <= 0:
-        raise ValueError("policy.image_size and policy.replan_steps must be >= 1 and "
-                         "policy.timeout_s > 0")
-    return {**s, "cameras": cameras, "image_keys": keys}
+KIND = "openpi"
+SETTINGS = (*COMMON, "api_key", "actions_key")
 
 
 def spec(checkpoint: str | None, options: Mapping[str, Any]) -> PolicySpec:
-    if checkpoint is not None:
-        raise ValueError("policy=openpi takes no checkpoint: the server loads it; point "
-                         "policy.host and policy.port at the server")
-    s = settings(options)
-    return PolicySpec(obs=("proprio", "rgb"), cameras=tuple(s["cameras"]))
+    return served_spec(KIND, checkpoint, settings(KIND, options, SETTINGS))
 
 
 def server_uri(s: Mapping[str, Any]) -> str:
@@ -101,32 +75,10 @@ class OpenpiClient:
         return msgpack_numpy.unpackb(reply)
 
 
-def request_builder(env: DexEnv, s: Mapping[str, Any]):
-    """Per-env request dicts from the batched observations, in openpi's layout."""
-    prompt = str(s["prompt"] or env.task.instruction)
-    pairs = list(zip(s["image_keys"], s["cameras"], strict=True))
-
-    def build(obs: dict[str, torch.Tensor], ids: list[int]) -> list[dict]:
-        index = torch.as_tensor(ids, device=obs["proprio"].device)
-        images = {key: resize_with_pad(obs[f"rgb/{camera}"][index], int(s["image_size"]))
-                  .cpu().numpy() for key, camera in pairs}
-        state = obs["proprio"][index].float().cpu().numpy()
-        requests = []
-        for row in range(len(ids)):
-            request: dict[str, Any] = {key: images[key][row] for key, _ in pairs}
-            if s["state_key"]:
-                request[str(s["state_key"])] = state[row]
-            request[str(s["prompt_key"])] = prompt
-            requests.append(request)
-        return requests
-
-    return build
-
-
 def build(checkpoint: str | None, env: DexEnv, device: torch.device | str,
           options: Mapping[str, Any]) -> ChunkQueuePolicy:
-    spec(checkpoint, options)
-    s = settings(options)
+    s = settings(KIND, options, SETTINGS)
+    served_spec(KIND, checkpoint, s)
     client = OpenpiClient(server_uri(s), s["api_key"], float(s["timeout_s"]))
     key = str(s["actions_key"])
 
@@ -138,9 +90,4 @@ def build(checkpoint: str | None, env: DexEnv, device: torch.device | str,
                                     f"(got {got}); set policy.actions_key")
         return reply[key]
 
-    return ChunkQueuePolicy(
-        PolicySpec(obs=("proprio", "rgb"), task=env.task.name,
-                   action_layout=tuple(env.embodiment.actuators),
-                   cameras=tuple(s["cameras"])),
-        env.num_envs, len(env.embodiment.actuators), request_builder(env, s), query,
-        int(s["replan_steps"]))
+    return chunk_policy(env, s, query)
