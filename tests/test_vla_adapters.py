@@ -17,6 +17,7 @@ from websockets.sync.server import serve
 
 from dexbench import make_env
 from dexbench.cli import eval as eval_cli
+from dexbench.cli.eval import EvalError
 from dexbench.policies.vla_adapters import json_numpy, msgpack_numpy, openpi, openvla_oft
 from dexbench.policies.vla_adapters.chunks import RemotePolicyError
 from dexbench.policies.vla_adapters.images import resize_with_pad
@@ -167,6 +168,23 @@ def test_openpi_eval_cli_end_to_end(server, capsys):
     assert result["episodes"] == 3 and result["complete"]
     # 3 episodes of 12 steps, 10 actions per query: 2 queries per episode
     assert len(server.requests) == 6
+
+
+def test_openpi_eval_resumes_with_another_server_but_not_other_settings(server):
+    server.reply = lambda request: {"actions": np.zeros((10, 26), np.float32)}
+    args = ["task=PickCube", "policy=openpi", "policy.host=127.0.0.1",
+            f"policy.image_size={SIZE}", "episodes=2", "num_envs=2", "horizon=3",
+            f"camera.width={SIZE}", f"camera.height={SIZE}", "progress=false", "name=vla"]
+    assert eval_cli.main([*args, f"policy.port={server.port}"]) == 0
+    asked = len(server.requests)
+    moved = FakeOpenpiServer()  # the same model restarted elsewhere: the run resumes
+    try:
+        assert eval_cli.main([*args, f"policy.port={moved.port}"]) == 0
+        assert len(server.requests) == asked and not moved.requests  # nothing left to run
+    finally:
+        moved.close()
+    with pytest.raises(EvalError, match="policy_settings"):
+        eval_cli.main([*args, f"policy.port={server.port}", "policy.replan_steps=5"])
 
 
 def test_openpi_eval_throughput_benchmark_needs_no_checkpoint(server):

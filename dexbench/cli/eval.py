@@ -44,7 +44,8 @@ from dexbench.eval.tables import write_tables
 from dexbench.eval.throughput import episodes_per_minute, model_module, untrained_checkpoint
 from dexbench.eval.video import EpisodeCamera, EpisodeVideos
 from dexbench.policies.common.protocol import Policy, PolicySpec, check_action_layout
-from dexbench.policies.registry import WITHOUT_CHECKPOINT, policy_module
+from dexbench.policies.registry import SERVED, WITHOUT_CHECKPOINT, policy_module
+from dexbench.policies.vla_adapters.served import TRANSPORT
 from dexbench.tasks.registry import TASKS, make_env
 
 RUNTIME_KEYS = ("num_envs", "device", "progress", "sim.nthread", "skip_missing")
@@ -93,7 +94,10 @@ def task_groups(cfg: DictConfig) -> tuple[str, dict[str, list[str]]]:
 def _identity(cfg: DictConfig, label: str, groups: dict[str, list[str]]) -> dict:
     """What fixes a run's episodes and outcomes: a resumed run must agree on all of it."""
     ckpt = cfg.checkpoint
-    return {"label": label, "categories": groups, "policy": policy_kind(cfg),
+    kind = policy_kind(cfg)
+    served = ({"policy_settings": {k: v for k, v in policy_options(cfg).items()
+                                   if k not in TRANSPORT}} if kind in SERVED else {})
+    return {"label": label, "categories": groups, "policy": kind, **served,
             "checkpoint": None if ckpt is None else str(pathlib.Path(ckpt).resolve()),
             "embodiment": cfg.embodiment, "episodes": int(cfg.episodes),
             "seed": int(cfg.seed), "horizon": cfg.horizon,

@@ -20,8 +20,10 @@ KINDS = {
     "openvla_oft": "dexbench.policies.vla_adapters.openvla_oft",
     "rl": "dexbench.policies.rl",
 }
-# Kinds that load no checkpoint here (scripted, or served by another program).
-WITHOUT_CHECKPOINT = frozenset({"expert", "openpi", "openvla_oft"})
+# Kinds whose model another program serves; their settings say what it is sent.
+SERVED = frozenset({"openpi", "openvla_oft"})
+# Kinds that load no checkpoint here (scripted, or served).
+WITHOUT_CHECKPOINT = SERVED | {"expert"}
 
 
 def policy_module(kind: str) -> ModuleType:

@@ -24,6 +24,9 @@ OBS = ("proprio", "rgb")
 # Settings every served kind has (its conf/policy/<kind>.yaml gives defaults and meaning).
 COMMON = ("host", "port", "cameras", "image_keys", "image_size", "state_key", "prompt_key",
           "prompt", "replan_steps", "timeout_s")
+# Settings that say where the server is, not what it sees: a resumed evaluation may
+# change them (a restarted server), but none of the others.
+TRANSPORT = ("host", "port", "api_key", "timeout_s")
 
 
 def settings(kind: str, options: Mapping[str, Any], names: tuple[str, ...]) -> dict[str, Any]:
