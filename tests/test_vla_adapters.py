@@ -64,8 +64,9 @@ def server():
     srv.close()
 
 
-def _options(server: FakeOpenpiServer, **overrides) -> dict:
-    return {**OPTIONS, "host": "127.0.0.1", "port": server.port, "image_size": SIZE,
+def _options(server, base: dict = OPTIONS, **overrides) -> dict:
+    """`base` settings pointed at a test `server`, with small images."""
+    return {**base, "host": "127.0.0.1", "port": server.port, "image_size": SIZE,
             "timeout_s": 10, **overrides}
 
 
@@ -284,16 +285,11 @@ def oft_server():
     srv.close()
 
 
-def _oft_options(server: FakeOftServer, **overrides) -> dict:
-    return {**OFT_OPTIONS, "host": "127.0.0.1", "port": server.port, "image_size": SIZE,
-            "timeout_s": 10, **overrides}
-
-
 def test_openvla_oft_requests_and_chunk_playback(oft_server):
     env = _env(2)
     chunk = env.home_action.numpy()[None] + 0.01 * np.arange(8, dtype=np.float32)[:, None]
     oft_server.reply = lambda request: list(chunk)
-    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server))
+    policy = openvla_oft.build(None, env, "cpu", _options(oft_server, OFT_OPTIONS))
     obs = first = env.reset()
     for step in range(9):
         action = policy.act(obs)
@@ -311,18 +307,19 @@ def test_openvla_oft_requests_and_chunk_playback(oft_server):
 def test_openvla_oft_double_encoded_answer_and_failures(oft_server):
     env = _env(1)
     oft_server.reply = lambda request: json_numpy.dumps([np.ones(26, np.float32)] * 8)
-    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server))
+    policy = openvla_oft.build(None, env, "cpu", _options(oft_server, OFT_OPTIONS))
     assert (policy.act(env.reset()).numpy() == 1).all()
     oft_server.reply = lambda request: "error"
-    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server))
+    policy = openvla_oft.build(None, env, "cpu", _options(oft_server, OFT_OPTIONS))
     with pytest.raises(RemotePolicyError, match="failed on the request"):
         policy.act(env.reset())
-    policy = openvla_oft.build(None, env, "cpu", _oft_options(oft_server, route="/predict"))
+    wrong_route = _options(oft_server, OFT_OPTIONS, route="/predict")
+    policy = openvla_oft.build(None, env, "cpu", wrong_route)
     with pytest.raises(RemotePolicyError, match="HTTP 404"):
         policy.act(env.reset())
     closed = FakeOftServer()
     closed.close()
-    policy = openvla_oft.build(None, env, "cpu", _oft_options(closed))
+    policy = openvla_oft.build(None, env, "cpu", _options(closed, OFT_OPTIONS))
     with pytest.raises(RemotePolicyError, match="no OpenVLA-OFT server answered"):
         policy.act(env.reset())
     with pytest.raises(ValueError, match="takes no checkpoint"):

@@ -166,11 +166,11 @@ def plan_tasks(cfg: DictConfig) -> tuple[list[TaskPlan], dict[str, str]]:
     `+skip_missing=true`, which returns them as skipped with their reasons)."""
     label, groups = task_groups(cfg)
     kind = policy_kind(cfg)
+    options = policy_options(cfg)
     plans, problems = [], {}
     for category, tasks in groups.items():
         for task in tasks:
-            plan = plan_task(task, category, kind, cfg.checkpoint, cfg.embodiment,
-                             policy_options(cfg))
+            plan = plan_task(task, category, kind, cfg.checkpoint, cfg.embodiment, options)
             if isinstance(plan, TaskPlan):
                 plans.append(plan)
             else:

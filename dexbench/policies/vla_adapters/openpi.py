@@ -33,7 +33,7 @@ SETTINGS = (*COMMON, "api_key", "actions_key")
 
 
 def spec(checkpoint: str | None, options: Mapping[str, Any]) -> PolicySpec:
-    return served_spec(KIND, checkpoint, settings(KIND, options, SETTINGS))
+    return served_spec(settings(KIND, checkpoint, options, SETTINGS))
 
 
 def server_uri(s: Mapping[str, Any]) -> str:
@@ -77,8 +77,7 @@ class OpenpiClient:
 
 def build(checkpoint: str | None, env: DexEnv, device: torch.device | str,
           options: Mapping[str, Any]) -> ChunkQueuePolicy:
-    s = settings(KIND, options, SETTINGS)
-    served_spec(KIND, checkpoint, s)
+    s = settings(KIND, checkpoint, options, SETTINGS)
     client = OpenpiClient(server_uri(s), s["api_key"], float(s["timeout_s"]))
     key = str(s["actions_key"])
 

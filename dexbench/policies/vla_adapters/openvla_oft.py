@@ -32,7 +32,7 @@ SETTINGS = (*COMMON, "route")
 
 
 def spec(checkpoint: str | None, options: Mapping[str, Any]) -> PolicySpec:
-    return served_spec(KIND, checkpoint, settings(KIND, options, SETTINGS))
+    return served_spec(settings(KIND, checkpoint, options, SETTINGS))
 
 
 def server_url(s: Mapping[str, Any]) -> str:
@@ -69,7 +69,6 @@ def post(url: str, request: dict, timeout_s: float) -> np.ndarray:
 
 def build(checkpoint: str | None, env: DexEnv, device: torch.device | str,
           options: Mapping[str, Any]) -> ChunkQueuePolicy:
-    s = settings(KIND, options, SETTINGS)
-    served_spec(KIND, checkpoint, s)
+    s = settings(KIND, checkpoint, options, SETTINGS)
     url, timeout_s = server_url(s), float(s["timeout_s"])
     return chunk_policy(env, s, lambda request: post(url, request, timeout_s))

@@ -11,6 +11,7 @@ match its reference examples.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any
 
 import torch
@@ -29,8 +30,13 @@ COMMON = ("host", "port", "cameras", "image_keys", "image_size", "state_key", "p
 TRANSPORT = ("host", "port", "api_key", "timeout_s")
 
 
-def settings(kind: str, options: Mapping[str, Any], names: tuple[str, ...]) -> dict[str, Any]:
-    """`options` checked against the kind's setting `names`, before any env is built."""
+def settings(kind: str, checkpoint: str | None, options: Mapping[str, Any],
+             names: tuple[str, ...]) -> dict[str, Any]:
+    """`options` checked against the kind's setting `names`, before any env is built (a
+    served kind loads no checkpoint)."""
+    if checkpoint is not None:
+        raise ValueError(f"policy={kind} takes no checkpoint: the server loads it; point "
+                         "policy.host and policy.port at the server")
     unknown = sorted(set(options) - set(names))
     missing = [k for k in names if k not in options]
     if unknown or missing:
@@ -47,10 +53,8 @@ def settings(kind: str, options: Mapping[str, Any], names: tuple[str, ...]) -> d
     return {**s, "cameras": cameras, "image_keys": keys}
 
 
-def served_spec(kind: str, checkpoint: str | None, s: Mapping[str, Any]) -> PolicySpec:
-    if checkpoint is not None:
-        raise ValueError(f"policy={kind} takes no checkpoint: the server loads it; point "
-                         "policy.host and policy.port at the server")
+def served_spec(s: Mapping[str, Any]) -> PolicySpec:
+    """What any served kind needs from the env: joint positions and its cameras' images."""
     return PolicySpec(obs=OBS, cameras=tuple(s["cameras"]))
 
 
@@ -78,7 +82,7 @@ def request_builder(env: DexEnv, s: Mapping[str, Any]) -> RequestBuilder:
 
 def chunk_policy(env: DexEnv, s: Mapping[str, Any], query: ChunkQuery) -> ChunkQueuePolicy:
     """The batched policy playing the chunks `query` returns for `env`'s requests."""
-    spec = PolicySpec(obs=OBS, task=env.task.name, action_layout=tuple(env.embodiment.actuators),
-                      cameras=tuple(s["cameras"]))
+    spec = replace(served_spec(s), task=env.task.name,
+                   action_layout=tuple(env.embodiment.actuators))
     return ChunkQueuePolicy(spec, env.num_envs, len(env.embodiment.actuators),
                             request_builder(env, s), query, int(s["replan_steps"]))
