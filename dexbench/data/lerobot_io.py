@@ -2,19 +2,24 @@
 
 Images (RGB and depth) are LeRobot `image` features: PNG/TIFF bytes inside the parquet
 files, lossless and with no video codec needed. Reading back for replay and resume goes
-straight to the parquet files (float64 simulator states stay float64).
+straight to the parquet files (float64 simulator states stay float64); users load a
+dataset through LeRobot with `load_lerobot_dataset`.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import pathlib
+from typing import Any
 
 import datasets
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
+import torch
 from lerobot.datasets import LeRobotDataset
+from lerobot.datasets.io_utils import hf_transform_to_torch
 
 from dexbench.data.episode import Episode
 from dexbench.data.features import ACTION, SIM_STATE
@@ -30,6 +35,33 @@ def create_dataset(root: pathlib.Path, features: dict, fps: int,
     return LeRobotDataset.create(repo_id=f"dexbench/{root.name}", fps=fps, features=features,
                                  root=root, robot_type=robot_type, use_videos=False,
                                  video_backend="pyav")
+
+
+def load_lerobot_dataset(root: pathlib.Path | str, **kwargs: Any) -> LeRobotDataset:
+    """A dexbench dataset as a `LeRobotDataset`, loaded quietly and with exact float64
+    features (`sim_state`); `kwargs` go to `LeRobotDataset` (`delta_timestamps`, ...).
+
+    Unless told a video backend, LeRobot tries to load torchcodec on every load and, where
+    FFmpeg is missing, logs a ~50-line warning; dexbench stores no video, so PyAV is named
+    and nothing is tried. LeRobot turns each numeric feature into a tensor of torch's
+    default float32; here float64 features come back float64, bit for bit.
+    """
+    root = pathlib.Path(root)
+    kwargs.setdefault("video_backend", "pyav")
+    dataset = LeRobotDataset(f"dexbench/{root.name}", root=root, **kwargs)
+    exact = [k for k, ft in dataset.meta.features.items() if ft["dtype"] == "float64"]
+    # a partial, not a lambda: DataLoader workers started by spawn pickle the dataset
+    dataset.hf_dataset.set_transform(functools.partial(_to_torch, exact=exact))
+    return dataset
+
+
+def _to_torch(batch: dict[str, list], exact: list[str]) -> dict[str, list]:
+    """LeRobot's conversion of a batch of rows to tensors, but float64 for `exact` keys."""
+    order = list(batch)
+    kept = {k: [torch.tensor(v, dtype=torch.float64) for v in batch.pop(k)]
+            for k in exact if k in batch}
+    converted = hf_transform_to_torch(batch)
+    return {k: kept[k] if k in kept else converted[k] for k in order}
 
 
 def add_episode(dataset: LeRobotDataset, instruction: str,

@@ -3,6 +3,8 @@ deploy server patches into its JSON handling.
 
 An array or NumPy scalar travels as `{"__numpy__": base64 of its bytes (C order),
 "dtype": its NumPy descr, e.g. "<f4", "shape": [...]}`; a scalar has shape `[]`.
+These few lines stand in for the package so that a client needs no extra dependency
+(and no global `json` patch); tests check them against `json_numpy` both ways.
 """
 
 from __future__ import annotations

@@ -1,9 +1,14 @@
-"""msgpack with NumPy arrays, in the layout openpi's policy servers use on the wire.
+"""msgpack with NumPy arrays, in the layout of openpi's `openpi_client.msgpack_numpy`.
 
-An array travels as a map `{"__ndarray__": True, "data": raw bytes, "dtype": dtype.str,
-"shape": [...]}`, a NumPy scalar as `{"__npgeneric__": True, "data": value, "dtype":
-dtype.str}`; object, void and complex arrays are refused (msgpack has no safe form for
-them, and pickling them would let a server run code on the client).
+An array travels as a map `{b"__ndarray__": True, b"data": raw bytes (C order), b"dtype":
+dtype.str, b"shape": [...]}`, a NumPy scalar as `{b"__npgeneric__": True, b"data":
+value, b"dtype": dtype.str}`. The keys are msgpack *bytes*, not strings: openpi's decoder
+looks only for bytes keys and passes anything else on as a plain dict. Object, void and
+complex values are refused, as openpi refuses them (msgpack has no safe form for them,
+and pickling them would let a server run code on the client).
+
+openpi-client itself is not imported: it declares numpy<2 and LeRobot needs numpy>=2, so
+it cannot be a dependency; tests check this module against it in both directions.
 """
 
 from __future__ import annotations
@@ -13,7 +18,8 @@ from typing import Any
 import msgpack
 import numpy as np
 
-_ARRAY, _SCALAR = "__ndarray__", "__npgeneric__"
+_ARRAY, _SCALAR = b"__ndarray__", b"__npgeneric__"
+_DATA, _DTYPE, _SHAPE = b"data", b"dtype", b"shape"
 _REFUSED_KINDS = ("O", "V", "c")
 
 
@@ -22,20 +28,19 @@ def _encode(obj: Any) -> Any:
         raise TypeError(f"cannot send a NumPy value of dtype {obj.dtype} over msgpack")
     if isinstance(obj, np.ndarray):
         data = np.ascontiguousarray(obj)
-        return {_ARRAY: True, "data": data.tobytes(), "dtype": data.dtype.str,
-                "shape": list(data.shape)}
+        return {_ARRAY: True, _DATA: data.tobytes(), _DTYPE: data.dtype.str,
+                _SHAPE: list(data.shape)}
     if isinstance(obj, np.generic):
-        return {_SCALAR: True, "data": obj.item(), "dtype": obj.dtype.str}
+        return {_SCALAR: True, _DATA: obj.item(), _DTYPE: obj.dtype.str}
     raise TypeError(f"cannot send a {type(obj).__name__} over msgpack")
 
 
 def _decode(obj: dict) -> Any:
-    keys = {k.decode() if isinstance(k, bytes) else k: v for k, v in obj.items()}
-    if keys.get(_ARRAY):
-        return np.frombuffer(keys["data"], dtype=np.dtype(keys["dtype"])).reshape(
-            keys["shape"]).copy()
-    if keys.get(_SCALAR):
-        return np.dtype(keys["dtype"]).type(keys["data"])
+    if _ARRAY in obj:
+        return np.frombuffer(obj[_DATA], dtype=np.dtype(obj[_DTYPE])).reshape(
+            obj[_SHAPE]).copy()
+    if _SCALAR in obj:
+        return np.dtype(obj[_DTYPE]).type(obj[_DATA])
     return obj
 
 
@@ -45,5 +50,5 @@ def packb(obj: Any) -> bytes:
 
 
 def unpackb(data: bytes) -> Any:
-    """Deserialize what `packb` (or an openpi server) produced."""
+    """Deserialize what `packb` or an openpi server (`openpi_client.msgpack_numpy`) packed."""
     return msgpack.unpackb(data, object_hook=_decode)

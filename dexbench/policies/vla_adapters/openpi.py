@@ -2,9 +2,10 @@
 
 openpi serves a fine-tuned checkpoint with `scripts/serve_policy.py` on a websocket
 (default port 8000). On connecting, the server sends its metadata; each request is one
-observation dict packed with msgpack (NumPy arrays as `msgpack_numpy` lays them out),
-and the answer holds `actions`, a chunk (H, action_dim) of absolute joint targets in the
-embodiment's actuator order. A text frame instead of a binary one is the server's error.
+observation dict packed with msgpack (NumPy arrays as openpi-client's `msgpack_numpy`
+lays them out), and the answer holds `actions`, a chunk (H, action_dim) of absolute
+joint targets in the embodiment's actuator order. A text frame instead of a binary one
+is the server's error (its traceback); the server then closes the connection.
 
 The request is `served.request_builder`'s; the default keys match openpi's single-arm
 examples (follow your server's input transform).
