@@ -98,12 +98,25 @@ def test_bench_render_reports_images_per_second():
     assert result["renderer"].startswith("cpu")  # the headline is the first result
 
 
-def test_snapshot_writes_a_contact_sheet():
+def test_snapshot_writes_a_labelled_contact_sheet():
+    import numpy as np
     from PIL import Image
 
-    from dexbench.cli.snapshot import snapshot
+    from dexbench.cli.snapshot import (
+        GAP_PX,
+        HEADER_PX,
+        ROW_LABEL_PX,
+        column_labels,
+        snapshot,
+    )
 
     path = pathlib.Path(snapshot(["task=PickCube", "visual=train", "num_envs=2",
                                   "camera.width=40", "camera.height=30"]))
-    image = Image.open(path)
-    assert image.size == (40 * 6, 30 * 2)  # 3 views + wrist + depth + cloud, 2 envs
+    image = np.asarray(Image.open(path).convert("L"))
+    # 3 views + wrist + depth + cloud, 2 envs, under a header and beside row labels
+    assert image.shape == (HEADER_PX + 2 * 30 + GAP_PX, ROW_LABEL_PX + 6 * 40 + 5 * GAP_PX)
+    header, row_labels = image[:HEADER_PX, ROW_LABEL_PX:], image[HEADER_PX:, :ROW_LABEL_PX]
+    assert (header < 128).any() and (row_labels < 128).any()  # text drawn in both
+    labels = column_labels(["front", "left", "right", "right/hand/wrist_cam"])
+    assert [m for m, _ in labels] == ["rgb"] * 4 + ["depth", "point cloud"]
+    assert labels[3][1] == "right wrist" and labels[4][1].startswith("front")

@@ -48,14 +48,20 @@ def _settings(cfg: DictConfig) -> CollectSettings:
     return CollectSettings(num_demos, attempts, post)
 
 
-def collect_one(cfg: DictConfig, make_expert: ExpertFactory, on_episode=None) -> dict:
-    """One dataset for `cfg.task` on `cfg.embodiment`; its statistics."""
+def _checked(cfg: DictConfig) -> tuple[dict, CollectSettings]:
+    """The env's keyword arguments and the settings, checked before anything is built."""
+    kwargs = env_kwargs(cfg)
     if cfg.obs != "state":
         raise ConfigError("collect records simulator states and state observations; render "
                           f"obs={cfg.obs} afterwards with `python replay.py dataset=<folder> "
                           f"obs={cfg.obs}`")
-    settings = _settings(cfg)
-    env = make_env(**env_kwargs(cfg))
+    return kwargs, _settings(cfg)
+
+
+def collect_one(cfg: DictConfig, make_expert: ExpertFactory, on_episode=None) -> dict:
+    """One dataset for `cfg.task` on `cfg.embodiment`; its statistics."""
+    kwargs, settings = _checked(cfg)
+    env = make_env(**kwargs)
     out = dataset_dir(cfg, env.task.name, env.embodiment.name)
     try:
         expert = make_expert(env)
@@ -91,6 +97,7 @@ def run_protocol(cfg: DictConfig, make_expert: ExpertFactory) -> dict:
         raise ConfigError("out= names one dataset; protocol=paper writes one per task and "
                           "embodiment under runs/datasets (name= picks their folder name)")
     tasks = list(cfg.tasks) if cfg.tasks else list(TASKS)
+    _checked(cfg)
     plan = paper_plan(tasks, int(cfg.num_demos), int(cfg.other_hands_demos))
     run_dir = new_run_dir("collect", "paper", cfg)
     results, skipped = [], []

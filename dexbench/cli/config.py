@@ -15,10 +15,11 @@ import sys
 import yaml
 from hydra import compose, initialize_config_dir
 from hydra.errors import HydraException
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from dexbench.envs.arena import PhysicsOptions
+from dexbench.envs.observations import resolve_preset
 from dexbench.envs.variation import PhysicalVariation, VisualVariation
 
 CONF_DIR = pathlib.Path(__file__).resolve().parents[2] / "conf"
@@ -42,13 +43,32 @@ def load_config(name: str, overrides: list[str]) -> DictConfig:
     return cfg
 
 
+def positive_int(cfg: DictConfig, key: str) -> int:
+    """`cfg.<key>` as an int >= 1, or a ConfigError saying so."""
+    value = OmegaConf.select(cfg, key)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ConfigError(f"{key} must be a whole number >= 1, got {value!r}; pass e.g. "
+                          f"{key}=1")
+    return value
+
+
+def obs_of(cfg: DictConfig) -> str | list[str]:
+    """`cfg.obs` as `make_env` takes it: a known preset or a list of known groups."""
+    obs = list(cfg.obs) if isinstance(cfg.obs, ListConfig) else str(cfg.obs)
+    try:
+        resolve_preset(obs)
+    except ValueError as err:
+        raise ConfigError(str(err)) from None
+    return obs
+
+
 def env_kwargs(cfg: DictConfig) -> dict:
-    """Keyword arguments of `make_env` from the common environment keys."""
+    """Keyword arguments of `make_env` from the common environment keys, checked."""
     physics = PhysicsOptions(timestep=float(cfg.sim.timestep),
                              control_hz=float(cfg.sim.control_hz))
-    obs = cfg.obs if isinstance(cfg.obs, str) else list(cfg.obs)
+    obs = obs_of(cfg)
     cam = cfg.camera
-    return dict(task=cfg.task, embodiment=cfg.embodiment, num_envs=int(cfg.num_envs),
+    return dict(task=cfg.task, embodiment=cfg.embodiment, num_envs=positive_int(cfg, "num_envs"),
                 seed=int(cfg.seed), obs=obs, backend=cfg.sim.backend,
                 nthread=int(cfg.sim.nthread), physics=physics,
                 cameras=list(cam.names) if cam.names else None,

@@ -5,10 +5,11 @@ demonstration's) on `num_envs` batched envs with batched policy inference, and w
 `runs/eval/<split-or-task>/<policy>/<name-or-timestamp>/`: `episodes.jsonl` (one line
 per finished episode, as it ends), `results.{md,csv,tex,json}` (per-task success with
 95% Wilson intervals, category and overall means), `success_by_category.png`, videos of
-`video.episodes` under `videos/<task>/`, `config.yaml`, `run.json` and `eval.log`.
-`resume=<run folder>` (or the same `name=`) continues an interrupted run: finished
-episodes are kept and not run again. `python eval.py task=<Task> policy=expert`
-evaluates one task.
+`video.episodes` under `videos/<task>/`, `config.yaml`, `run.json` and `eval.log` (per
+task, and the error that stopped the run). `resume=<run folder>` (or the same `name=`)
+continues an interrupted run: finished episodes are kept and not run again.
+`python eval.py task=<Task> policy=expert` evaluates one task. The policy fixes the
+observation preset (a checkpoint's own; `state` for the expert): `obs=` may only repeat it.
 """
 
 from __future__ import annotations
@@ -30,10 +31,13 @@ from dexbench.cli.config import (
     env_kwargs,
     load_config,
     new_run_dir,
+    obs_of,
     runs_root,
     write_atomic,
 )
+from dexbench.cli.errors import USER_ERRORS
 from dexbench.envs.dex_env import DexEnv
+from dexbench.envs.scene import check_pair
 from dexbench.eval.merge import RESULTS_FILE
 from dexbench.eval.metrics import summarize
 from dexbench.eval.plan import TaskPlan, plan_task
@@ -44,11 +48,12 @@ from dexbench.eval.tables import write_tables
 from dexbench.eval.throughput import episodes_per_minute, model_module, untrained_checkpoint
 from dexbench.eval.video import EpisodeCamera, EpisodeVideos
 from dexbench.policies.common.protocol import Policy, PolicySpec, check_action_layout
-from dexbench.policies.registry import SERVED, WITHOUT_CHECKPOINT, policy_module
+from dexbench.policies.registry import KINDS, SERVED, WITHOUT_CHECKPOINT, policy_module
 from dexbench.policies.vla_adapters.served import TRANSPORT
-from dexbench.tasks.registry import TASKS, make_env
+from dexbench.tasks.registry import TASKS, make_env, task_class
 
 RUNTIME_KEYS = ("num_envs", "device", "progress", "sim.nthread", "skip_missing")
+TRAINERS = {"rl": "python rl.py task=<Task>"}  # what writes a kind's checkpoints, if not train.py
 CHART_FILE = "success_by_category.png"
 
 
@@ -60,11 +65,15 @@ def eval_config(argv: list[str]) -> tuple[DictConfig, pathlib.Path | None]:
     """The resolved config, and the run folder when `resume=` names one."""
     resume = [a.split("=", 1)[1] for a in argv if a.split("=", 1)[0] == "resume"]
     if not resume:
-        return load_config("eval", argv), None
+        cfg = load_config("eval", argv)
+        if not any(a.lstrip("+").split("=", 1)[0] == "obs" for a in argv):
+            cfg.obs = None  # the policy's own preset; an explicit obs= must agree with it
+        return cfg, None
     run_dir = pathlib.Path(resume[0])
     if not (run_dir / "config.yaml").exists():
         raise EvalError(f"resume={run_dir} is not an evaluation run folder (no config.yaml)")
     cfg = OmegaConf.create(yaml.safe_load((run_dir / "config.yaml").read_text()))
+    cfg.obs = None  # the policy's, as when the run was created
     for arg in argv:
         key, _, value = arg.lstrip("+").partition("=")
         if key == "resume":
@@ -106,6 +115,13 @@ def _identity(cfg: DictConfig, label: str, groups: dict[str, list[str]]) -> dict
 
 
 def _check(cfg: DictConfig) -> None:
+    kind = policy_kind(cfg)
+    if cfg.checkpoint is None and kind in KINDS and kind not in WITHOUT_CHECKPOINT:
+        trainer = TRAINERS.get(kind, f"python train.py policy={kind} task=<Task>")
+        raise EvalError(f"policy={kind} needs checkpoint=<a .pt file, a training run folder "
+                        f"or a folder of them>; `{trainer}` writes one")
+    if cfg.get("obs") is not None:
+        obs_of(cfg)
     episodes = int(cfg.episodes)
     if episodes < 1 or (cfg.num_envs is not None and int(cfg.num_envs) < 1):
         raise EvalError(f"episodes and num_envs must be >= 1, got {episodes} and "
@@ -175,23 +191,38 @@ def plan_tasks(cfg: DictConfig) -> tuple[list[TaskPlan], dict[str, str]]:
                 plans.append(plan)
             else:
                 problems[task] = plan
-    if problems and not cfg.get("skip_missing", False):
+    total, rest = sum(map(len, groups.values())), len(plans)
+    if problems and (not rest or not cfg.get("skip_missing", False)):
         by_reason: dict[str, list[str]] = {}
         for task, why in problems.items():
             by_reason.setdefault(why, []).append(task)
         listed = "; ".join(f"{', '.join(ts)}: {why}" for why, ts in by_reason.items())
-        total = sum(map(len, groups.values()))
+        if total == 1:
+            raise EvalError(listed)
+        hint = f"; add +skip_missing=true to evaluate the other {rest}" if rest else ""
         raise EvalError(f"{len(problems)} of the {total} tasks of {label} cannot be "
-                        f"evaluated ({listed}); add +skip_missing=true to evaluate the "
-                        f"other {total - len(problems)}")
+                        f"evaluated ({listed}){hint}")
+    _check_obs(cfg, plans)
     return plans, problems
+
+
+def _check_obs(cfg: DictConfig, plans: list[TaskPlan]) -> None:
+    """The policy fixes what it observes: an explicit `obs=` may only repeat it."""
+    if cfg.get("obs") is None:
+        return
+    obs = obs_of(cfg)
+    for plan in plans:
+        wanted = plan.spec.obs if isinstance(plan.spec.obs, str) else list(plan.spec.obs)
+        if wanted != obs:
+            raise EvalError(f"policy={policy_kind(cfg)} observes obs={wanted} on {plan.task}, "
+                            f"not obs={cfg.obs}: the policy fixes its observations; drop obs=")
 
 
 def build_env(cfg: DictConfig, plan: TaskPlan, num_envs: int) -> DexEnv:
     """A batched env for `plan` with the policy's observation preset."""
-    kwargs = env_kwargs(OmegaConf.merge(cfg, {"num_envs": num_envs}))
     obs = plan.spec.obs if isinstance(plan.spec.obs, str) else list(plan.spec.obs)
-    kwargs.update(task=plan.task, embodiment=plan.embodiment, obs=obs)
+    kwargs = env_kwargs(OmegaConf.merge(cfg, {"num_envs": num_envs, "obs": obs}))
+    kwargs.update(task=plan.task, embodiment=plan.embodiment)
     if plan.spec.cameras is not None:
         kwargs.update(cameras=list(plan.spec.cameras))
     env = make_env(**kwargs)
@@ -285,15 +316,19 @@ def _evaluate_task(cfg: DictConfig, run_dir: pathlib.Path, plan: TaskPlan, pendi
         policy = build_policy(cfg, plan, env)
     except ValueError as err:
         if not cfg.get("skip_missing", False):
-            raise EvalError(f"{plan.task}: {err} (+skip_missing=true evaluates the other "
-                            "tasks)") from None
+            others = sum(map(len, task_groups(cfg)[1].values())) > 1
+            hint = " (+skip_missing=true evaluates the other tasks)" if others else ""
+            raise EvalError(f"{plan.task}: {err}{hint}") from None
         skipped[plan.task] = f"policy cannot run: {err}"
         _log(run_dir, f"{plan.task}: skipped: {err}")
         return
     videos = None
     if cfg.video.episodes:
-        camera = EpisodeCamera(env, str(cfg.video.camera), int(cfg.video.width),
-                               int(cfg.video.height))
+        try:
+            camera = EpisodeCamera(env, str(cfg.video.camera), int(cfg.video.width),
+                                   int(cfg.video.height))
+        except ValueError as err:
+            raise EvalError(f"video.camera={cfg.video.camera}: {err}") from None
         videos = EpisodeVideos(camera, {int(e) for e in cfg.video.episodes},
                                run_dir / "videos" / plan.task, 1.0 / env.control_dt)
     bar.set_description(plan.task)
@@ -321,9 +356,16 @@ def main(argv: list[str]) -> int:
     try:
         summary = evaluate(cfg, plans, skipped, run_dir)
     except KeyboardInterrupt:
+        _log(run_dir, "interrupted")
         print(f"\ninterrupted: finished episodes are kept in {run_dir}/episodes.jsonl; "
               f"continue with `python eval.py resume={run_dir}`", file=sys.stderr)
         return 130
+    except USER_ERRORS as err:
+        _log(run_dir, f"error: {err}")
+        raise
+    except Exception as err:
+        _log(run_dir, f"stopped by {type(err).__name__}: {err}")
+        raise
     print((run_dir / "results.md").read_text())
     print(json.dumps({"overall": summary["overall"], "episodes": summary["episodes"],
                       "complete": summary["complete"], "run_dir": str(run_dir),
@@ -339,17 +381,16 @@ def bench_eval(argv: list[str]) -> dict:
     n, episodes, sequential = int(cfg.num_envs), int(cfg.episodes), int(cfg.sequential_episodes)
     if min(n, episodes, sequential, int(cfg.horizon)) < 1:
         raise EvalError("num_envs, episodes, sequential_episodes and horizon must be >= 1")
+    task = str(cfg.task)
+    embodiment = cfg.embodiment or task_class(task).default_embodiment
+    check_pair(TASKS[task], embodiment)
     run_dir = new_run_dir("bench", f"eval-{kind}-{cfg.task}", cfg)
     checkpoint = cfg.checkpoint
     if checkpoint is None and kind not in WITHOUT_CHECKPOINT:
-        task = str(cfg.task)
-        if task not in TASKS:
-            raise EvalError(f"task={task} is not implemented (`python -m dexbench list tasks`)")
         try:
             spec = PolicySpec(obs=model_module(kind).OBS)
         except ValueError as err:
             raise EvalError(str(err)) from None
-        embodiment = cfg.embodiment or TASKS[task].default_embodiment
         probe = build_env(cfg, TaskPlan(task, "", embodiment, None, spec), 2)
         checkpoint = str(untrained_checkpoint(kind, OmegaConf.to_container(cfg.policy), probe,
                                               run_dir / "untrained.pt"))

@@ -22,6 +22,7 @@ from omegaconf import DictConfig, OmegaConf
 from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, runs_root
 from dexbench.data.files import write_json
 from dexbench.data.meta import DatasetError
+from dexbench.envs.scene import check_pair
 from dexbench.policies.common.checkpoint import save_checkpoint
 from dexbench.policies.common.demos import Demos, available_groups, load_demos
 from dexbench.policies.common.run_log import RunLog
@@ -105,6 +106,8 @@ def settings_of(cfg: DictConfig) -> TrainSettings:
 def main(argv: list[str]) -> int:
     cfg = load_config("train", argv)
     model_mod = model_module(cfg.policy.name)
+    if cfg.embodiment:  # before looking for demonstrations that could never exist
+        check_pair(task_class(cfg.task), cfg.embodiment)
     settings = settings_of(cfg)
     if cfg.wandb.enabled and importlib.util.find_spec("wandb") is None:
         raise ConfigError("wandb.enabled=true needs `pip install wandb`")

@@ -18,6 +18,7 @@ import platform
 import mujoco
 import numpy as np
 
+from dexbench.data.files import file_digest
 from dexbench.envs.arena import PhysicsOptions
 from dexbench.envs.dex_env import STATE_SPEC, DexEnv
 from dexbench.envs.variation import PhysicalVariation, VisualVariation
@@ -162,3 +163,27 @@ def read_meta(root: pathlib.Path) -> dict:
     if missing:
         raise DatasetError(f"{path} lacks {missing}; re-create the dataset")
     return meta
+
+
+def damaged_files(root: pathlib.Path, meta: dict) -> list[str]:
+    """One line per file `meta["files"]` lists that is missing or not the bytes written
+    (damage that still parses included: parquet pages carry no checksums)."""
+    problems = []
+    for name, digest in meta["files"].items():
+        path = root / name
+        if not path.is_file():
+            problems.append(f"{path} is missing; the dataset is incomplete")
+        elif file_digest(path) != digest:
+            problems.append(f"{path} differs from the checksum recorded when it was written: "
+                            "it was changed or corrupted since; restore it or re-create the "
+                            "dataset")
+    return problems
+
+
+def verify_files(root: pathlib.Path, meta: dict) -> None:
+    """Refuse a dataset whose files changed since they were written, before any use."""
+    problems = damaged_files(root, meta)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise DatasetError(f"{problems[0]}{more}; `python -m dexbench validate "
+                           f"dataset={root}` lists every problem")

@@ -7,6 +7,8 @@ is set, so the env's worlds hold consecutive frames of one episode. Observations
 written per frame (no history axis): stacking is a training-time choice, and the
 preset's history length is kept in `meta/dexbench.json`. Action replay re-simulates each
 episode's actions from its first recorded state and reports how far the states drift.
+Both first check the dataset's files against the checksums recorded when they were
+written, so damage that still parses never propagates into new data.
 """
 
 from __future__ import annotations
@@ -21,7 +23,14 @@ from tqdm import tqdm
 from dexbench.data.features import ACTION, SIM_STATE, dataset_features, feature_key, frame_value
 from dexbench.data.files import digests, publish, write_json
 from dexbench.data.lerobot_io import create_dataset, read_episodes
-from dexbench.data.meta import META_FILE, DatasetError, code_changes, env_from_config, read_meta
+from dexbench.data.meta import (
+    META_FILE,
+    DatasetError,
+    code_changes,
+    env_from_config,
+    read_meta,
+    verify_files,
+)
 from dexbench.envs.dex_env import STATE_SPEC, DexEnv
 from dexbench.envs.observations import resolve_preset
 from dexbench.sim.backend import state_layout
@@ -42,6 +51,7 @@ def replay_states(source: pathlib.Path, out: pathlib.Path, obs: str | list[str],
     Returns what changed in the code since recording (replaying anyway needs `force`).
     """
     meta = read_meta(source)
+    verify_files(source, meta)
     episodes = read_episodes(source, meta, observations=False)
     if out.exists():
         raise DatasetError(f"{out} exists; remove it or pass out=<another folder>")
@@ -107,6 +117,7 @@ def replay_actions(source: pathlib.Path, num_envs: int = 8, progress: bool = Tru
     at which success first held (-1: never) and whether it holds after the last action.
     """
     meta = read_meta(source)
+    verify_files(source, meta)
     episodes = read_episodes(source, meta, observations=False)
     env = env_from_config(meta["env_config"], num_envs=min(num_envs, len(episodes)),
                           obs="state", **env_kwargs)

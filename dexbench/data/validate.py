@@ -17,9 +17,14 @@ import numpy as np
 import pyarrow as pa
 
 from dexbench.data.features import ACTION, SIM_STATE
-from dexbench.data.files import file_digest
 from dexbench.data.lerobot_io import column_array, info, read_parquet
-from dexbench.data.meta import DatasetError, code_changes, env_from_config, read_meta
+from dexbench.data.meta import (
+    DatasetError,
+    code_changes,
+    damaged_files,
+    env_from_config,
+    read_meta,
+)
 
 ACTION_TOLERANCE = 1e-5  # float32 actions against float64 actuator ranges
 
@@ -80,14 +85,7 @@ def _files(root: pathlib.Path, report: Report) -> tuple[dict, list[pa.Table]]:
         except DatasetError as err:
             report.errors.append(str(err))
     if not report.errors:
-        for name, digest in meta["files"].items():
-            path = root / name
-            if not path.is_file():
-                report.errors.append(f"{path} is missing; the dataset is incomplete")
-            elif file_digest(path) != digest:
-                report.errors.append(f"{path} differs from the checksum recorded when it was "
-                                     "written: it was changed or corrupted since; restore it "
-                                     "or re-create the dataset")
+        report.errors += damaged_files(root, meta)
     return meta, [] if report.errors else tables
 
 

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from dexbench.embodiments.builder import parse_embodiment
+from dexbench.envs.scene import pair_problem
 from dexbench.policies.common.protocol import PolicySpec
 from dexbench.policies.registry import policy_module
 from dexbench.tasks.registry import TASKS
@@ -40,10 +40,6 @@ def checkpoint_for(checkpoint: str | None, task: str, embodiment: str, kind: str
     return checkpoint
 
 
-def _arity(name: str) -> str:
-    return "two hands" if parse_embodiment(name).bimanual else "one hand"
-
-
 def plan_task(task: str, category: str, kind: str, checkpoint: str | None,
               embodiment: str | None, options: Mapping[str, Any]) -> TaskPlan | str:
     """The plan for policy `kind` on `task`, or the reason it cannot be evaluated."""
@@ -59,7 +55,7 @@ def plan_task(task: str, category: str, kind: str, checkpoint: str | None,
         return (f"the checkpoint was trained on {spec.task}; give a folder with one "
                 "checkpoint per task (<folder>/<task>)")
     name = embodiment or spec.embodiment or cls.default_embodiment
-    if parse_embodiment(name).bimanual != parse_embodiment(cls.default_embodiment).bimanual:
-        return (f"the task needs {_arity(cls.default_embodiment)}; embodiment {name} has "
-                f"{_arity(name)}")
+    problem = pair_problem(cls, name)
+    if problem is not None:
+        return f"the task {problem}"
     return TaskPlan(task, category, name, ckpt, spec)

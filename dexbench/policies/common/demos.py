@@ -1,7 +1,8 @@
 """Demonstrations as flat arrays for training: every frame of every episode, in order.
 
 Read straight from a dexbench LeRobot v3 dataset's parquet files (only the columns a
-policy needs, no image decoding, no per-frame Python), or from a `.npz` written by
+policy needs, no image decoding, no per-frame Python; the files are first checked against
+the checksums recorded when they were written), or from a `.npz` written by
 `Demos.save` (point clouds at 16 bits: a compact copy to ship to another machine).
 Training windows and the train/validation split are built from episode boundaries.
 """
@@ -17,7 +18,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from dexbench.data.features import ACTION, GROUP_KEYS
-from dexbench.data.meta import DatasetError, read_meta
+from dexbench.data.meta import DatasetError, read_meta, verify_files
 
 DATA_GLOB = "data/chunk-*/file-*.parquet"
 HALF_PRECISION = ("pointcloud",)
@@ -71,6 +72,7 @@ def _column(table: pa.Table, key: str, shape: list[int]) -> np.ndarray:
 def load_demos(root: pathlib.Path, groups: list[str]) -> Demos:
     """The action and the observation `groups` of every frame of the dataset at `root`."""
     meta = read_meta(root)
+    verify_files(root, meta)
     features = json.loads((root / "meta" / "info.json").read_text())["features"]
     missing = [g for g in groups if GROUP_KEYS[g] not in features]
     if missing:
