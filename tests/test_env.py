@@ -1,12 +1,10 @@
-"""DexEnv behaviour: determinism, resets, action validation, observations, gym API."""
+"""DexEnv behaviour: determinism, resets, action validation, observations (the Gymnasium
+wrapper: test_gym_env.py)."""
 
-import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from gymnasium.utils.env_checker import check_env
 
-import dexbench  # noqa: F401  (registers the gym ids)
 from dexbench.embodiments.builder import UnknownEmbodimentError
 from dexbench.envs.dex_env import DexEnv, InvalidActionError
 from dexbench.envs.scene import InfeasibleTaskError
@@ -135,11 +133,3 @@ def test_pickcube_success_predicate_and_time_limit():
     env.steps[:] = env.episode_steps - 1
     _, reward, _, truncated, info = env.step(env.home_action.repeat(3, 1))
     assert truncated.all() and reward.shape == (3,) and info["success"].dtype == torch.bool
-
-
-def test_gym_wrapper_passes_gymnasium_checker():
-    env = gym.make("dexbench/PickCube-v0")
-    check_env(env.unwrapped, skip_render_check=True)
-    obs, _ = env.reset(seed=5)
-    again, _ = env.reset(seed=5)
-    np.testing.assert_array_equal(obs["state"], again["state"])

@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from dexbench.assets.objects import T_SHAPE_RECTS
-from dexbench.experts import coffee, make_expert
+from dexbench.experts import make_expert
 from dexbench.experts.adapter import ActionAdapter, HandCommand
 from dexbench.experts.motion import palm_down, turned
 from dexbench.experts.push import inside_rects, outline
@@ -61,11 +61,6 @@ def test_task_specific_expert_solves_on_floating_shadow(task, seed, minimum):
 def test_pick_expert_on_arm_mounted_leap(embodiment, seed):
     solved = _solved("PickCube", embodiment, seed=seed, enough=4)
     assert solved >= 3, f"PickCube on {embodiment}: expert solved {solved}/4"
-
-
-def test_coffee_expert_spout_is_the_cartons():
-    env = make_env("MakeCoffee", num_envs=1, nthread=1)
-    assert env.task.objects["milk"].points["spout"] == ("milk", coffee.SPOUT)
 
 
 def _solved(task: str, embodiment: str | None, seed: int, enough: int) -> int:

@@ -253,7 +253,8 @@ def test_functional_pour_mug_each_condition():
     assert not _ok(env), "lift < 0.20"
     _pour_state(env)
     _forward(env)
-    rim = _point(env, "mug", "rim")
+    # A fingertip pressed onto the rim's wall (4 cm from its centre, off the handle).
+    rim = _point(env, "mug", "rim") + 0.04 * env.view.axis("mug", (0.0, 1.0, 0.0))[0].numpy()
     tip = env.view.hand_geom_pos()[0, -1].numpy()
     for axis in ("x", "y", "z"):
         _set_joint(env, f"right/wrist/{axis}", float((rim - tip)["xyz".index(axis)]))

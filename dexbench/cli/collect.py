@@ -21,7 +21,7 @@ from dexbench import experts
 from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, runs_root
 from dexbench.data.collect import CollectSettings, Staging, collect
 from dexbench.data.files import write_json
-from dexbench.embodiments.builder import embodiment_names, parse_embodiment
+from dexbench.embodiments.builder import other_hands as same_mount_hands
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.tasks.registry import TASKS, make_env, task_class
@@ -82,11 +82,8 @@ def paper_plan(tasks: list[str], num_demos: int, other_hands: int) -> list[tuple
     plan = []
     for task in tasks:
         default = task_class(task).default_embodiment
-        mount = parse_embodiment(default)
         plan.append((task, default, num_demos))
-        plan += [(task, name, other_hands) for name in embodiment_names()
-                 if name != default and parse_embodiment(name).mount == mount.mount
-                 and parse_embodiment(name).bimanual == mount.bimanual]
+        plan += [(task, name, other_hands) for name in same_mount_hands(default)]
     return [entry for entry in plan if entry[2] > 0]
 
 

@@ -30,7 +30,7 @@ def tasks_markdown() -> str:
                 continue
             hands = "bimanual" if cls.bimanual else "single"
             horizon = f"{cls.episode_seconds:g} s ({round(cls.episode_seconds * 60)} steps)"
-            lines.append(f"| `{name}` | {cls.description} | {cls.success_text} | {horizon} "
+            lines.append(f"| `{name}` | {cls.description} | {cls.success_doc()} | {horizon} "
                          f"| {hands} | `{cls.default_embodiment}` |")
         lines.append("")
     return "\n".join(lines)

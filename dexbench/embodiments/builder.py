@@ -19,7 +19,7 @@ from dexbench.assets.objects import new_spec
 from dexbench.assets.robots import robot_spec
 from dexbench.embodiments.arms import ARMS
 from dexbench.embodiments.hand_geometry import hand_geometry, hand_model_spec
-from dexbench.embodiments.hands import HANDS, SYNERGIES
+from dexbench.embodiments.hands import HANDS, SYNERGIES, HandSpec
 from dexbench.embodiments.ik import solve_site_pose
 
 MOUNTS = ("floating", "fr3", "ur10e", "xarm7")
@@ -65,6 +65,15 @@ class EmbodimentName:
     def sides(self) -> tuple[str, ...]:
         return ("right", "left") if self.bimanual else ("right",)
 
+    @property
+    def arity(self) -> int:
+        """How many hands: 1 or 2."""
+        return len(self.sides)
+
+    @property
+    def hand_spec(self) -> HandSpec:
+        return HANDS[self.hand]
+
     def __str__(self) -> str:
         return f"{'bimanual_' if self.bimanual else ''}{self.mount}_{self.hand}"
 
@@ -90,6 +99,19 @@ def parse_embodiment(name: str) -> EmbodimentName:
     return EmbodimentName(mount, hand, bimanual)
 
 
+def embodiment_arity(name: str) -> int:
+    """How many hands embodiment `name` has (1 or 2)."""
+    return parse_embodiment(name).arity
+
+
+def other_hands(name: str) -> list[str]:
+    """The embodiments with `name`'s mount and arity but another hand, in registry order."""
+    ref = parse_embodiment(name)
+    return [other for other in embodiment_names() if other != name
+            and (parse_embodiment(other).mount, parse_embodiment(other).bimanual)
+            == (ref.mount, ref.bimanual)]
+
+
 @dataclass(frozen=True)
 class SideLayout:
     """Named parts of one side of a composed embodiment (all names prefixed)."""
@@ -103,6 +125,7 @@ class SideLayout:
     hand_joints: tuple[str, ...]
     home_palm_pos: tuple[float, float, float]
     home_qpos: dict[str, float] = field(default_factory=dict)
+    hand_root: str = ""  # the hand model's root body: its subtree is the whole hand
 
 
 @dataclass(frozen=True)
@@ -148,8 +171,9 @@ def _mark_robot(body: mujoco.MjsBody) -> None:
 def _attach_hand(
     spec: mujoco.MjSpec, parent: mujoco.MjsBody, hand: str, side: str,
     frame_rot: np.ndarray, frame_pos: np.ndarray,
-) -> tuple[list[str], list[str], list[str]]:
-    """Attach a hand so its hand frame H lands at (frame_pos, frame_rot) in `parent`."""
+) -> tuple[list[str], list[str], list[str], str]:
+    """Attach a hand so its hand frame H lands at (frame_pos, frame_rot) in `parent`;
+    returns its joints, fingertip bodies and sites, and its root body."""
     geo = hand_geometry(hand, side)
     parts = HANDS[hand].sides[side]
     child = hand_model_spec(HANDS[hand], side)
@@ -167,10 +191,11 @@ def _attach_hand(
     frame = parent.add_frame(pos=root_pos.tolist(), quat=_quat(root_rot))
     prefix = f"{side}/hand/"
     hand_joints = [prefix + j.name for j in child.joints]
+    root = prefix + child.worldbody.first_body().name
     spec.attach(child, prefix=prefix, frame=frame)
     tips = [prefix + b for b in parts.fingertip_bodies]
     tip_sites = [f"{prefix}tip_{b}" for b in parts.fingertip_bodies]
-    return hand_joints, tips, tip_sites
+    return hand_joints, tips, tip_sites, root
 
 
 def _add_floating_side(spec: mujoco.MjSpec, hand: str, side: str, palm_pos) -> SideLayout:
@@ -188,12 +213,12 @@ def _add_floating_side(spec: mujoco.MjSpec, hand: str, side: str, palm_pos) -> S
         act.forcerange = [-WRIST_FORCE[jtype], WRIST_FORCE[jtype]]
         act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
         joints.append(name)
-    hand_joints, tips, tip_sites = _attach_hand(spec, wrist, hand, side, HOME_PALM_ROT,
-                                                np.zeros(3))
+    hand_joints, tips, tip_sites, root = _attach_hand(spec, wrist, hand, side,
+                                                      HOME_PALM_ROT, np.zeros(3))
     _mark_robot(wrist)
     return SideLayout(side, f"{side}/base", f"{side}/hand/palm", tuple(tips),
                       tuple(tip_sites), tuple(joints), tuple(hand_joints), tuple(palm_pos),
-                      {j: 0.0 for j in joints})
+                      {j: 0.0 for j in joints}, root)
 
 
 def _add_arm_side(spec: mujoco.MjSpec, arm: str, hand: str, side: str, palm_pos,
@@ -225,13 +250,13 @@ def _add_arm_side(spec: mujoco.MjSpec, arm: str, hand: str, side: str, palm_pos,
     flange = site.parent
     mount = flange.add_body(name=f"{side}/mount", pos=list(site.pos), quat=list(site.quat))
     palm_in_flange = np.array([0.0, 0.0, standoff])
-    hand_joints, tips, tip_sites = _attach_hand(spec, mount, hand, side, info.hand_rot,
-                                                palm_in_flange)
+    hand_joints, tips, tip_sites, root = _attach_hand(spec, mount, hand, side,
+                                                      info.hand_rot, palm_in_flange)
     _mark_robot(spec.body(arm_root))
     home_q = home if home is not None else dict(zip(arm_joints, info.seed_qpos, strict=True))
     return SideLayout(side, f"{side}/base", f"{side}/hand/palm", tuple(tips),
                       tuple(tip_sites), tuple(arm_joints), tuple(hand_joints),
-                      tuple(palm_pos), home_q)
+                      tuple(palm_pos), home_q, root)
 
 
 def _palm_home(name: EmbodimentName, side: str) -> tuple[float, float, float]:

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 
 from dexbench.embodiments.builder import EmbodimentPlan, SideLayout
-from dexbench.embodiments.hands import SYNERGIES
+from dexbench.embodiments.hands import SYNERGIES, HandSpec
 
 
 @dataclass(frozen=True)
@@ -16,16 +16,24 @@ class Embodiment:
     """Action layout, proprio joints and named poses, in the compiled model's order.
 
     `poses` holds full action vectors: `home` (mounts at home, hand open) and one per
-    hand synergy (mounts at home, hand in that synergy).
+    hand synergy (mounts at home, hand in that synergy). `mount`, `hand` and `arity` are
+    what the name says, so no caller needs to parse the name.
     """
 
     name: str
+    mount: str
+    hand: HandSpec
+    arity: int
     sides: dict[str, SideLayout]
     actuators: tuple[str, ...]
     ctrl_range: np.ndarray  # (nu, 2)
     proprio_joints: tuple[str, ...]
     poses: dict[str, np.ndarray]
     home_qpos: dict[str, float]  # every robot joint
+
+    @property
+    def bimanual(self) -> bool:
+        return self.arity == 2
 
     @property
     def action_dim(self) -> int:
@@ -61,6 +69,9 @@ class Embodiment:
                                                                    *s.hand_joints))
         return cls(
             name=str(plan.name),
+            mount=plan.name.mount,
+            hand=plan.name.hand_spec,
+            arity=plan.name.arity,
             sides=plan.sides,
             actuators=actuators,
             ctrl_range=model.actuator_ctrlrange.copy(),

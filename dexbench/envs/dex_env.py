@@ -44,6 +44,13 @@ STATE_SPEC = (int(_S.mjSTATE_FULLPHYSICS) | int(_S.mjSTATE_WARMSTART) | int(_S.m
 SUCCESS_HOLD_STEPS = 10
 
 
+def time_limit_steps(episode_seconds: float, physics: PhysicsOptions | None = None) -> int:
+    """Control steps in a time limit of `episode_seconds`: `DexEnv` truncates on this step,
+    and Gymnasium registers it as `max_episode_steps` (one source of truth)."""
+    physics = physics or PhysicsOptions()
+    return round(episode_seconds / (physics.decimation * physics.timestep))
+
+
 class InvalidActionError(ValueError):
     """An action batch with the wrong shape or non-finite values."""
 
@@ -91,7 +98,7 @@ class DexEnv:
         self.physics = physics or PhysicsOptions()
         self.decimation = self.physics.decimation
         self.control_dt = self.decimation * self.physics.timestep
-        self.episode_steps = round(task.episode_seconds / self.control_dt)
+        self.episode_steps = time_limit_steps(task.episode_seconds, self.physics)
         visual = visual or VisualVariation()
         self.scene = compose_scene(task, embodiment, self.physics, visual.background_files())
         self.embodiment = self.scene.embodiment
@@ -151,9 +158,11 @@ class DexEnv:
         return {k: tuple(v.shape[1:]) for k, v in obs.items()}
 
     def reseed(self, seed: int) -> None:
-        """Restart every environment's reset stream from `seed` (takes effect at reset)."""
+        """Restart every environment's reset stream and the observation-noise stream from
+        `seed` (takes effect at reset), so a seeded reset is reproducible."""
         self.seed = seed
         self._episode[:] = 0
+        self._noise.manual_seed(seed)
 
     @property
     def episode_keys(self) -> np.ndarray:

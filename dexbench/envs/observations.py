@@ -1,7 +1,8 @@
 """Observation groups and presets as the paper's appendix defines them.
 
 Groups: policy (previous action), proprio (robot joint positions), contact (per-fingertip
-force from the task object, robot base frame, clipped to +-20 N), state (task state),
+force from the task's contact objects and their moving parts, robot base frame,
+clipped to +-20 N), state (task state),
 privileged (robot joint velocities, palm/fingertip poses and velocities, task extras;
 never in a preset), goal (commanded target). Camera groups (rgb, depth, pointcloud)
 are computed by `camera_obs.CameraObservations`.
@@ -90,7 +91,9 @@ class ObservationTerms:
         elif group == "contact":
             if len(self._contact_adr) == 0:
                 return None
-            forces = f["sensordata"][:, self._contact_adr].reshape(len(last_action), -1, 3)
+            # Summed over the task's contact bodies: the force on each fingertip.
+            forces = f["sensordata"][:, self._contact_adr].reshape(
+                len(last_action), len(self._contact_base), -1, 3).sum(dim=2)
             base_quat = f["xquat"][:, self._contact_base]
             out = quat_apply_inverse(base_quat, forces).clamp(
                 -CONTACT_FORCE_CLIP, CONTACT_FORCE_CLIP).flatten(1)

@@ -3,20 +3,44 @@
 from __future__ import annotations
 
 import pathlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 
-from dexbench.embodiments.builder import add_embodiment, parse_embodiment
+from dexbench.assets.objects import Zone
+from dexbench.embodiments.builder import SideLayout, add_embodiment, parse_embodiment
 from dexbench.embodiments.layout import Embodiment
 from dexbench.envs.arena import PhysicsOptions, build_arena
-from dexbench.envs.task_api import Task
+from dexbench.envs.task_api import ZONE_CONTACTS, Task, zone_key
 
 CONTACT_FORCE_CLIP = 20.0  # N, per fingertip and axis, as the paper's contact group
 
 
 class InfeasibleTaskError(ValueError):
     """A task and embodiment that cannot go together (e.g. bimanual task, one hand)."""
+
+
+def _hands(bimanual: bool) -> str:
+    return "two hands" if bimanual else "one hand"
+
+
+def pair_problem(task: Task | type[Task], embodiment: str) -> str | None:
+    """Why `task` cannot run on `embodiment` (it has another number of hands: a second
+    hand on a single-hand task would have no defined role), or None when it can."""
+    parsed = parse_embodiment(embodiment)
+    if task.bimanual == parsed.bimanual:
+        return None
+    other = replace(parsed, bimanual=task.bimanual)
+    return (f"needs {_hands(task.bimanual)}; embodiment {embodiment} has "
+            f"{_hands(parsed.bimanual)}: use embodiment={other}")
+
+
+def check_pair(task: Task | type[Task], embodiment: str) -> None:
+    """The one rule on task x embodiment pairs: every command that builds a scene (and
+    eval's planning, before a run starts) goes through it."""
+    problem = pair_problem(task, embodiment)
+    if problem is not None:
+        raise InfeasibleTaskError(f"{task.name} {problem}")
 
 
 @dataclass(frozen=True)
@@ -26,7 +50,8 @@ class Scene:
     model: mujoco.MjModel
     embodiment: Embodiment
     options: PhysicsOptions
-    contact_sensors: tuple[str, ...]  # one per fingertip, right hand first
+    contact_sensors: tuple[str, ...]  # per fingertip (right hand first), one per
+    # contact body of the task
     link_sites: tuple[str, ...]  # palm and fingertip sites with pose/velocity sensors
     hand_geoms: tuple[int, ...]  # collision geoms of every hand link
 
@@ -39,25 +64,30 @@ def _link_sensors(spec: mujoco.MjSpec, site: str) -> None:
 
 
 def _contact_sensor(spec: mujoco.MjSpec, obj: str, tip_body: str) -> str:
-    """Net force the object exerts on a fingertip, world frame (reduce = netforce)."""
-    name = f"{tip_body}:contact"
+    """Net force the subtree of body `obj` (the object and its moving parts) exerts on a
+    fingertip, world frame (reduce = netforce)."""
+    name = f"{tip_body}:contact:{obj}"
     spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_CONTACT,
-                    objtype=mujoco.mjtObj.mjOBJ_BODY, objname=obj,
+                    objtype=mujoco.mjtObj.mjOBJ_XBODY, objname=obj,
                     reftype=mujoco.mjtObj.mjOBJ_BODY, refname=tip_body,
                     intprm=[2, 3, 1])  # data = force, reduce = netforce, num = 1
     return name
+
+
+def _zone_sensor(spec: mujoco.MjSpec, zone: Zone, side: SideLayout) -> None:
+    """Contacts between a hand (its whole subtree) and a no-touch zone's body: found and
+    position of the deepest `ZONE_CONTACTS` (`SceneView.zone_contacts` reads them)."""
+    spec.add_sensor(name=f"{zone_key(zone)}:{side.side}", type=mujoco.mjtSensor.mjSENS_CONTACT,
+                    objtype=mujoco.mjtObj.mjOBJ_BODY, objname=zone.body,
+                    reftype=mujoco.mjtObj.mjOBJ_XBODY, refname=side.hand_root,
+                    intprm=[1 | 16, 1, ZONE_CONTACTS])  # found + pos, reduce = mindist
 
 
 def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
                   backgrounds: tuple[pathlib.Path, ...] = ()) -> Scene:
     """Build and compile the scene for a task on an embodiment (`backgrounds`: image files
     background variation may show)."""
-    parsed = parse_embodiment(embodiment)
-    if task.bimanual and not parsed.bimanual:
-        raise InfeasibleTaskError(
-            f"{task.name} needs two hands but {embodiment} has one; use "
-            f"bimanual_{parsed.mount}_{parsed.hand}"
-        )
+    check_pair(task, embodiment)
     spec = build_arena(options, backgrounds)
     plan = add_embodiment(spec, embodiment)
     task.build(spec)
@@ -66,10 +96,11 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
     link_sites = tuple(s for side in sides for s in (side.palm_site, *side.fingertip_sites))
     for site in link_sites:
         _link_sensors(spec, site)
-    contacts: tuple[str, ...] = ()
-    if task.contact_body is not None:
-        contacts = tuple(_contact_sensor(spec, task.contact_body, tip)
-                         for side in sides for tip in side.fingertip_bodies)
+    contacts = tuple(_contact_sensor(spec, body, tip) for side in sides
+                     for tip in side.fingertip_bodies for body in task.contact_bodies)
+    for zone in dict.fromkeys(task.zones):
+        for side in sides:
+            _zone_sensor(spec, zone, side)
     model = spec.compile()
     prefixes = tuple(f"{side}/hand/" for side in plan.sides)
     hand_geoms = tuple(

@@ -17,7 +17,15 @@ import mujoco
 import numpy as np
 import torch
 
+from dexbench.assets.objects import Zone
 from dexbench.envs.rotations import quat_apply
+
+ZONE_CONTACTS = 16  # contacts a no-touch sensor reports per hand (the deepest first)
+
+
+def zone_key(zone: Zone) -> str:
+    """The name prefix of a no-touch zone's contact sensors (one per hand)."""
+    return f"touch:{zone.body}:{zone.kind}:{zone.pos}:{zone.radius}:{zone.half_length}"
 
 
 @dataclass
@@ -126,6 +134,21 @@ class SceneView:
         vec = self._vector(local).expand(self.body_pos(body).shape)
         return quat_apply(self.body_quat(body), vec)
 
+    def zone_contacts(self, zone: Zone) -> tuple[torch.Tensor, torch.Tensor]:
+        """Contacts between any hand and `zone.body`: (N, K) whether each slot holds one
+        and (N, K, 3) its world position (the scene adds the sensors for task zones)."""
+        key = ("zone", zone_key(zone))
+        if key not in self._ids:
+            model = self._model
+            names = [model.sensor(i).name for i in range(model.nsensor)]
+            self._ids[key] = [int(model.sensor_adr[i]) for i, n in enumerate(names)
+                              if n.startswith(zone_key(zone) + ":")]
+            if not self._ids[key]:
+                raise KeyError(f"no contact sensors for zone {zone}; is it a task zone?")
+        data = torch.cat([self._f["sensordata"][:, a : a + 4 * ZONE_CONTACTS]
+                          for a in self._ids[key]], dim=1).unflatten(1, (-1, 4))
+        return data[..., 0] > 0, data[..., 1:]
+
     def hand_geom_pos(self) -> torch.Tensor:
         """(N, G, 3) centres of every collision geom of every hand."""
         return self._f["geom_xpos"][:, self.hand_geom_ids]
@@ -150,9 +173,21 @@ class Task(ABC):
     episode_seconds: ClassVar[float] = 20.0
     bimanual: ClassVar[bool] = False  # True: needs two hands
     default_embodiment: ClassVar[str] = "floating_shadow"
-    contact_body: ClassVar[str | None] = None  # fingertip contact forces are vs this body
+    contact_bodies: ClassVar[tuple[str, ...]] = ()  # fingertip contact forces: from these
+    # bodies' subtrees (the `contact` group), summed per fingertip
+    zones: ClassVar[tuple[Zone, ...]] = ()  # no-touch zones: the scene senses hand contacts
+    expert: ClassVar[object | None] = None  # the scripted expert's plan (`tasks.plans`)
+    deviations: ClassVar[tuple[str, ...]] = ()  # where success differs from the paper's
     tracked_bodies: ClassVar[tuple[str, ...]] = ()  # bodies whose reset pose is kept
     memory_size: ClassVar[int] = 0  # floats of per-env memory (`SceneView.memory`)
+
+    @classmethod
+    def success_doc(cls) -> str:
+        """The paper's success condition, then every deviation from it (the task's own
+        and its templates'), for the docs."""
+        notes = dict.fromkeys(n for c in reversed(cls.__mro__)
+                              for n in c.__dict__.get("deviations", ()))
+        return " ".join([cls.success_text, *notes])
 
     @abstractmethod
     def build(self, spec: mujoco.MjSpec) -> None:

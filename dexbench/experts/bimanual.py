@@ -14,17 +14,16 @@ axis), which the script measures from the fingertips instead of assuming.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import IntEnum
 
 import numpy as np
 import torch
 
-from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import palm_down, step_towards
+from dexbench.tasks.plans import TwoHandPlan
 from dexbench.tasks.predicates import tilt_deg
 
 
@@ -35,22 +34,6 @@ class Phase(IntEnum):
     PULL = 3  # pull outward: the curled fingers press the rims
     LIFT = 4  # both palms rise by the same height
     RELEASE = 5  # a lost grip: open, back off, start again
-
-
-@dataclass(frozen=True)
-class TwoHandPlan:
-    """Which grip point (an `ObjectInfo.points` name) each side hooks, and how.
-
-    `shift` moves the grip point in the right hand's frame from where the hand holds a
-    5 cm cube (mirrored for a mirrored hand); `pull` (m) is how far the closed hands
-    draw back along their fingers, `lift` (m) how high they then rise.
-    """
-
-    body: str
-    grips: dict[str, str]
-    shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    pull: float = 0.025
-    lift: float = 0.27
 
 
 APPROACH_HEIGHT = 0.08  # m behind (above) the palm of the grip pose
@@ -75,15 +58,15 @@ class TwoHandLiftExpert:
     def __init__(self, env: DexEnv, plan: TwoHandPlan) -> None:
         self.env, self.plan = env, plan
         self.adapter = ActionAdapter(env)
-        info = env.task.objects[plan.body]
+        info = env.task.objects[plan.obj]
+        self.body = info.root
         self._points = {side: info.points[name] for side, name in plan.grips.items()}
         self._up = info.axes["up"]
         model = env.scene.model
         layouts = env.embodiment.sides
         self._palm_site = {s: model.site(layouts[s].palm_site).id for s in plan.grips}
         self._thumb_site = {s: model.site(layouts[s].fingertip_sites[0]).id for s in plan.grips}
-        hand = env.embodiment.name.rsplit("_", 1)[1]
-        self._offset = np.asarray(HANDS[hand].grasp_offset) + np.asarray(plan.shift)
+        self._offset = np.asarray(env.embodiment.hand.grasp_offset) + np.asarray(plan.shift)
         self._dt = env.control_dt
         n = env.num_envs
         self.phase = np.zeros(n, dtype=np.int64)
@@ -126,7 +109,7 @@ class TwoHandLiftExpert:
         """Per side: the grip point (world) and the palm-down hand frame whose fingers
         point from it at the object's centre."""
         view = self.env.view
-        centre = view.body_pos(self.plan.body).numpy()
+        centre = view.body_pos(self.body).numpy()
         poses = {}
         for side, (body, local) in self._points.items():
             point = view.point_pos(body, local).numpy()

@@ -9,14 +9,11 @@ the hand's `grasp_offset`, so the script serves every hand and mount.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
 from enum import IntEnum
 
 import numpy as np
 import torch
 
-from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.rotations import quat_apply
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
@@ -30,6 +27,8 @@ from dexbench.experts.motion import (
     step_towards,
     yawed,
 )
+from dexbench.tasks.plans import GraspPlan, LevelPlan, locate
+from dexbench.tasks.predicates import tilt_deg
 
 
 class Phase(IntEnum):
@@ -39,47 +38,6 @@ class Phase(IntEnum):
     CARRY = 3  # move the held object where the task wants it
     RELEASE = 4  # open and back off (a lost grasp, or a placed object)
     DONE = 5  # placed: stay clear, hand open
-
-
-@dataclass(frozen=True)
-class GraspPlan:
-    """Where and how to hold the object, and where to take it.
-
-    `point` is the grasp point in the object's body frame, `shift` moves it in the
-    hand frame from where the hand holds a 5 cm cube (its `grasp_offset`) to suit the
-    object's size; `side` grasps (upright cylinders) hold the object in a handshake
-    pose instead of from above, `pitch` (rad) tilts the fingers down from the top grasp
-    (90 deg: hanging, palm towards the object, to hook a handle). `yaw` is "box" (the
-    object's face yaw nearest to the approach), "body" (the object's yaw) or "none",
-    turned further by `yaw_offset` (rad, or `yaw_offset(env) -> (N,)`). `settle` (s)
-    replaces `SETTLE_SECONDS`, the closed hand's wait before moving.
-    After the grasp the object is lifted `lift` metres, or, with
-    `target(env) -> (N, 3)`, carried until its `goal_point` (body frame) is there; with
-    `release`, the hand then opens and backs off (placing), as it does whenever
-    `let_go(env) -> (N,) bool` holds while carrying. `carry_high` lifts the
-    object over the table's clutter until it is above its target (off for pulling).
-    """
-
-    body: str
-    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    yaw: str = "box"
-    yaw_offset: float | Callable[[DexEnv], np.ndarray] = 0.0
-    side: bool = False
-    pitch: float = 0.0
-    synergy: str = "power"
-    lift: float = 0.28
-    target: Callable[[DexEnv], np.ndarray] | None = None
-    goal_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    release: bool = False
-    let_go: Callable[[DexEnv], np.ndarray] | None = None
-    carry_high: bool = True
-    settle: float | None = None
-
-
-def task_goal(env: DexEnv) -> np.ndarray:
-    """The goal point the task sampled this episode."""
-    return env.view.goal[:, :3].cpu().numpy()
 
 
 APPROACH_HEIGHT = 0.10  # m behind the palm of the grasp pose
@@ -106,8 +64,10 @@ class GraspExpert:
     def __init__(self, env: DexEnv, plan: GraspPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
-        hand = env.embodiment.name.rsplit("_", 1)[1]
-        self.offset = np.asarray(HANDS[hand].grasp_offset) + np.asarray(plan.shift)
+        self.offset = np.asarray(env.embodiment.hand.grasp_offset) + np.asarray(plan.shift)
+        objects = env.task.objects
+        self.body, self.point = locate(objects, plan.obj, plan.point)
+        self.goal_body, self.goal_point = locate(objects, plan.obj, plan.goal_point)
         model = env.scene.model
         self._palm_site = model.site(env.embodiment.sides[side].palm_site).id
         self._dt = env.control_dt
@@ -127,10 +87,11 @@ class GraspExpert:
     def _palm(self) -> tuple[np.ndarray, np.ndarray]:
         return site_pose(self.env, self._palm_site)
 
-    def _object_point(self, local: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    def _object_point(self, body: str, local: tuple[float, float, float],
+                      ) -> tuple[np.ndarray, np.ndarray]:
         view = self.env.view
-        pos = view.body_pos(self.plan.body)
-        quat = view.body_quat(self.plan.body)
+        pos = view.body_pos(body)
+        quat = view.body_quat(body)
         offset = torch.as_tensor(local, dtype=pos.dtype).expand(pos.shape)
         return (pos + quat_apply(quat, offset)).numpy(), quat.numpy()
 
@@ -153,7 +114,7 @@ class GraspExpert:
         self.grasp_pos[ids] = point[ids] - rot @ self.offset
 
     def act(self) -> torch.Tensor:
-        point, quat = self._object_point(self.plan.point)
+        point, quat = self._object_point(self.body, self.point)
         self.timer += self._dt
         phase = self.phase
         target_pos, target_rot = self.grasp_pos.copy(), self.grasp_rot.copy()
@@ -208,7 +169,7 @@ class GraspExpert:
             if self.plan.target is None:
                 target_pos[carry] = (self.lift_from + np.array([0.0, 0.0, self.plan.lift]))[carry]
             else:
-                goal_point, _ = self._object_point(self.plan.goal_point)
+                goal_point, _ = self._object_point(self.goal_body, self.goal_point)
                 goal = self.plan.target(self.env)
                 # Travel above the table's clutter; come down only over the target.
                 far = np.linalg.norm((goal - goal_point)[:, :2], axis=1) > CARRY_NEAR
@@ -249,6 +210,41 @@ class GraspExpert:
         command = HandCommand(self.pos, self.rot, self.closure, self.plan.synergy)
         return self.adapter.actions({self.side: command})
 
+    @property
+    def carrying(self) -> np.ndarray:
+        """(N,) holding the object and moving it."""
+        return self.phase == Phase.CARRY
+
+    @property
+    def finished(self) -> np.ndarray:
+        """(N,) the object has been placed (or let go) and the hand is clear."""
+        return self.phase == Phase.DONE
+
     def _advance(self, mask: np.ndarray, phase: Phase) -> None:
         self.phase[mask] = phase
         self.timer[mask] = 0.0
+
+
+class LevelGraspExpert(GraspExpert):
+    """A `LevelPlan`: the grasp whose carry also pitches the hand fingers-down as far as
+    keeps the held object at the plan's tilt (an object held by one end sags)."""
+
+    def __init__(self, env: DexEnv, plan: LevelPlan, side: str = "right") -> None:
+        super().__init__(env, plan.grasp, side)
+        self.level = plan
+        self._axis = env.task.objects[plan.grasp.obj].axes[plan.axis]
+        self.angle = np.zeros(env.num_envs)
+        self.base = self.grasp_rot.copy()
+
+    def act(self) -> torch.Tensor:
+        plan = self.level
+        carry = self.phase == Phase.CARRY
+        start = carry & (self.angle == 0.0)
+        self.base[start] = self.grasp_rot[start]
+        tilt = tilt_deg(self.env.view.axis(*self._axis)).cpu().numpy()
+        sag = np.where(plan.active(self.env), plan.tilt - tilt, 0.0)
+        step = plan.rate * self._dt * np.clip(sag / 10.0, -1.0, 1.0)
+        self.angle = np.where(carry, np.clip(self.angle + step, 0.0, plan.max_angle), 0.0)
+        for i in np.flatnonzero(carry):
+            self.grasp_rot[i] = self.base[i] @ pitch_down(self.angle[i])
+        return super().act()

@@ -10,8 +10,6 @@ not make it pivot between the fingers.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import torch
 
@@ -19,6 +17,7 @@ from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import step_towards, turned
+from dexbench.tasks.plans import InsertPlan
 
 SPEED = 0.15  # m/s while lining up
 PUSH_SPEED = 0.04  # m/s into the bore
@@ -33,26 +32,16 @@ STALL_SECONDS = 4.0  # lining up this long without pushing: `stalled` (grasp it 
 PUSH_PAST = 0.01  # m the push aims beyond the target (the bottom stops it)
 
 
-@dataclass(frozen=True)
-class InsertPlan:
-    """The peg's `head` point and `shaft` axis (peg frame), the hole's `entrance` and
-    `target` points and `bore` axis (hole frame, pointing out of the hole)."""
-
-    peg: str
-    head: tuple[float, float, float]
-    shaft: tuple[float, float, float]
-    hole: str
-    entrance: tuple[float, float, float]
-    target: tuple[float, float, float]
-    bore: tuple[float, float, float]
-
-
 class InsertExpert:
     """Line up, then push in; the hand stays closed on the peg throughout."""
 
     def __init__(self, env: DexEnv, plan: InsertPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
+        peg, hole = env.task.objects[plan.peg], env.task.objects[plan.hole]
+        self.head, self.shaft = peg.points[plan.head], peg.axes[plan.shaft]
+        self.entrance, self.target = hole.points[plan.entrance], hole.points[plan.target]
+        self.bore = hole.axes[plan.bore]
         self._palm = env.scene.model.site(env.embodiment.sides[side].palm_site).id
         n = env.num_envs
         self.pos = np.zeros((n, 3))
@@ -80,13 +69,13 @@ class InsertExpert:
         self.adapter.reset(ids)
 
     def act(self) -> torch.Tensor:
-        view, plan = self.env.view, self.plan
-        head = view.point_pos(plan.peg, plan.head).numpy()
-        shaft = view.axis(plan.peg, plan.shaft).numpy()
-        inward = -view.axis(plan.hole, plan.bore).numpy()
-        entrance = view.point_pos(plan.hole, plan.entrance).numpy()
+        view = self.env.view
+        head = view.point_pos(*self.head).numpy()
+        shaft = view.axis(*self.shaft).numpy()
+        inward = -view.axis(*self.bore).numpy()
+        entrance = view.point_pos(*self.entrance).numpy()
         line_up = entrance - (STANDOFF * inward)
-        home = view.point_pos(plan.hole, plan.target).numpy() + PUSH_PAST * inward
+        home = view.point_pos(*self.target).numpy() + PUSH_PAST * inward
         angle = np.arccos(np.clip((shaft * inward).sum(axis=1), -1.0, 1.0))
         self.pushing |= ((np.linalg.norm(head - line_up, axis=1) < LINED_UP)
                          & (angle < ALIGNED))

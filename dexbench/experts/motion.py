@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import mujoco
 import numpy as np
 
 from dexbench.embodiments.builder import HOME_PALM_ROT
-from dexbench.envs.dex_env import DexEnv
+
+# Shared with the plans (`dexbench.tasks.plans`), which need them too.
+from dexbench.tasks.plans import body_yaw as body_yaw
+from dexbench.tasks.plans import wrap as wrap
 
 # A right hand's handshake pose: fingers +x, palm facing +y, thumb up. A vertical
 # cylinder at the grasp offset then lies across the palm, as in a power grasp of a glass.
@@ -26,17 +27,6 @@ def yawed(base: np.ndarray, yaw: np.ndarray) -> np.ndarray:
 def palm_down(yaw: np.ndarray) -> np.ndarray:
     """(N, 3, 3) hand frames palm-down with the fingers along world yaw `yaw` (N,)."""
     return yawed(HOME_PALM_ROT, yaw)
-
-
-def body_yaw(quat: np.ndarray) -> np.ndarray:
-    """(N,) yaw about world z of bodies with orientations `quat` (N, 4) (w, x, y, z)."""
-    w, x, y, z = quat.T
-    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-
-
-def wrap(angle: np.ndarray) -> np.ndarray:
-    """Angles (rad) wrapped into [-pi, pi)."""
-    return (angle + np.pi) % (2 * np.pi) - np.pi
 
 
 def box_yaw(quat: np.ndarray) -> np.ndarray:
@@ -57,18 +47,6 @@ def turned(axes: np.ndarray, angle: float | np.ndarray) -> np.ndarray:
     k -= k.transpose(0, 2, 1)
     angle = np.broadcast_to(np.asarray(angle, dtype=float), (len(axes),))[:, None, None]
     return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
-
-
-def turnable_offset(body: str, final_yaw: Callable[[DexEnv], np.ndarray],
-                    offsets: tuple[float, float]) -> Callable[[DexEnv], np.ndarray]:
-    """Grasp yaw offsets (N,) from `body`'s yaw, one of two `offsets` (rad): the one from
-    which the hand's turn that brings the body to `final_yaw(env)` keeps the hand's yaw
-    within +-pi (a floating wrist's yaw joint stops there)."""
-    def offset(env: DexEnv) -> np.ndarray:
-        yaw = body_yaw(env.view.body_quat(body).cpu().numpy())
-        turn = wrap(final_yaw(env) - yaw)
-        return np.where(np.abs(wrap(yaw + offsets[0]) + turn) < np.pi, *offsets)
-    return offset
 
 
 def step_towards(pos: np.ndarray, rot: np.ndarray, target_pos: np.ndarray,

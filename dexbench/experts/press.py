@@ -8,8 +8,6 @@ in the hand frame), so the script serves every hand and mount.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import torch
 
@@ -17,24 +15,12 @@ from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, tips_in_palm_frame
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
+from dexbench.tasks.plans import PressPlan, locate
 
 HOVER = 0.08  # m above the point before pressing
 PRESS_DEPTH = 0.05  # m the command goes below the point: the push
 SPEED = 0.4  # m/s in the air
 PRESS_SPEED = 0.08  # m/s while pressing
-
-
-@dataclass(frozen=True)
-class PressPlan:
-    """`body`/`point`: where to press (point in the body frame); `with_fingers` presses
-    with the mean fingertip rather than the palm; `yaw` turns the fingers (rad) from
-    the object's x axis, `pitch` tilts them down (rad) so only the tips touch."""
-
-    body: str
-    point: tuple[float, float, float]
-    with_fingers: bool = True
-    yaw: float = 0.0
-    pitch: float = 0.0
 
 
 class PressExpert:
@@ -43,6 +29,7 @@ class PressExpert:
     def __init__(self, env: DexEnv, plan: PressPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
+        self.body, self.point = locate(env.task.objects, plan.obj, plan.point)
         layout = env.embodiment.sides[side]
         model = env.scene.model
         self._palm = model.site(layout.palm_site).id
@@ -66,8 +53,8 @@ class PressExpert:
 
     def act(self) -> torch.Tensor:
         view = self.env.view
-        body_quat = view.body_quat(self.plan.body).numpy()
-        point = view.point_pos(self.plan.body, self.plan.point).numpy()
+        body_quat = view.body_quat(self.body).numpy()
+        point = view.point_pos(self.body, self.point).numpy()
         rot = palm_down(body_yaw(body_quat) + self.plan.yaw) @ pitch_down(self.plan.pitch)
         palm_at_point = point - np.einsum("nij,nj->ni", rot, self.contact)
         hover = palm_at_point + [0.0, 0.0, HOVER]

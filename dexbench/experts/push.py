@@ -13,9 +13,6 @@ hand and mount.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-
 import numpy as np
 import torch
 
@@ -29,6 +26,7 @@ from dexbench.experts.adapter import (
 )
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
+from dexbench.tasks.plans import PushPlan
 
 SPEED = 0.4  # m/s in the air
 PUSH_SPEED = 0.25  # m/s while pushing
@@ -61,20 +59,6 @@ class Stage:
     """Each env's step in its push: plan, rise, over to the start, down, push; done."""
 
     PLAN, RISE, OVER, DOWN, PUSH, DONE = range(6)
-
-
-@dataclass(frozen=True)
-class PushPlan:
-    """`body`: the pushed block; `rects`: its footprint as rectangles (cx, cy, hx, hy)
-    in its body frame, a union; `height`: its thickness; `goal(env) -> (N, 3)`: the
-    target (x, y, yaw) of its body frame; `done(env) -> (N,) bool`: close enough, the
-    hand lifts off and waits."""
-
-    body: str
-    rects: Sequence[tuple[float, float, float, float]]
-    height: float
-    goal: Callable[[DexEnv], np.ndarray]
-    done: Callable[[DexEnv], np.ndarray]
 
 
 def outline(rects: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -216,8 +200,9 @@ class PushExpert:
     def _plan(self, ids: np.ndarray) -> None:
         """Choose each env's next push: where, which way and how far."""
         view = self.env.view
-        pos = view.body_pos(self.plan.body).numpy()[ids, :2]
-        yaw = body_yaw(view.body_quat(self.plan.body).numpy()[ids])
+        body = self.env.task.objects[self.plan.obj].root
+        pos = view.body_pos(body).numpy()[ids, :2]
+        yaw = body_yaw(view.body_quat(body).numpy()[ids])
         goal = np.asarray(self.plan.goal(self.env))[ids]
         rot, goal_rot = _rot2(yaw), _rot2(goal[:, 2])
         centre = pos + rot @ self.centroid

@@ -14,42 +14,46 @@ import torch
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert, host_ids
-
-Subgoal = Callable[[DexEnv], torch.Tensor]
+from dexbench.tasks.plans import SequencePlan
 
 
 class SequenceExpert:
-    """`steps`: (expert, subgoal) pairs; the last subgoal is never consulted. Where
-    `restart(env)` holds (e.g. a held object was dropped), an env starts over."""
+    """The steps of a `SequencePlan`, each run by the expert `build(env, step.plan)`."""
 
-    def __init__(self, env: DexEnv, steps: Sequence[tuple[Expert, Subgoal]],
-                 restart: Subgoal | None = None) -> None:
-        self.env, self.steps, self.restart = env, list(steps), restart
+    def __init__(self, env: DexEnv, plan: SequencePlan,
+                 build: Callable[[DexEnv, object], Expert]) -> None:
+        self.env, self.plan = env, plan
+        self.experts: Sequence[Expert] = [build(env, step.plan) for step in plan.steps]
         self.stage = np.zeros(env.num_envs, dtype=np.int64)
+
+    def _done(self, k: int) -> np.ndarray:
+        step, expert = self.plan.steps[k], self.experts[k]
+        done = expert.finished if step.until is None else step.until(self.env, expert)
+        return np.asarray(done.cpu() if isinstance(done, torch.Tensor) else done, dtype=bool)
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
         self.stage[ids] = 0
-        self.steps[0][0].reset(torch.as_tensor(ids))
+        self.experts[0].reset(torch.as_tensor(ids))
 
     def act(self) -> torch.Tensor:
-        if self.restart is not None:
-            again = (self.stage > 0) & self.restart(self.env).cpu().numpy()
+        if self.plan.restart is not None:
+            again = (self.stage > 0) & np.asarray(self.plan.restart(self.env, self.experts))
             if again.any():
                 self.stage[again] = 0
-                self.steps[0][0].reset(torch.as_tensor(np.flatnonzero(again)))
-        for k, (_, done) in enumerate(self.steps[:-1]):
-            handover = (self.stage == k) & done(self.env).cpu().numpy()
+                self.experts[0].reset(torch.as_tensor(np.flatnonzero(again)))
+        for k in range(len(self.experts) - 1):
+            handover = (self.stage == k) & self._done(k)
             if handover.any():
                 self.stage[handover] = k + 1
-                self.steps[k + 1][0].reset(torch.as_tensor(np.flatnonzero(handover)))
+                self.experts[k + 1].reset(torch.as_tensor(np.flatnonzero(handover)))
         actions = None
-        for k, (expert, _) in enumerate(self.steps):
+        for k, expert in enumerate(self.experts):
             mine = self.stage == k
             if not mine.any():
                 continue
             proposal = expert.act()
             actions = proposal if actions is None else actions
-            actions[torch.as_tensor(mine, device=proposal.device)] = proposal[
-                torch.as_tensor(mine, device=proposal.device)]
+            rows = torch.as_tensor(mine, device=proposal.device)
+            actions[rows] = proposal[rows]
         return actions

@@ -9,8 +9,6 @@ along its arc until the task succeeds. The contact point is measured on the hand
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import torch
 
@@ -23,29 +21,13 @@ from dexbench.experts.adapter import (
 )
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
+from dexbench.tasks.plans import TurnPlan, locate
 
 SPEED = 0.4  # m/s in the air
 PUSH_SPEED = 0.1  # m/s along the arc
 HOVER = 0.08  # m above the lever before going down beside it
 LEAD = 0.03  # m the pads aim ahead of the tip along the arc
 BESIDE = 0.025  # m the pads start behind the tip, on the side they push from
-
-
-@dataclass(frozen=True)
-class TurnPlan:
-    """`body`/`tip`: the turning body and its tip point (body frame); `hinge`: its hinge
-    joint, turned towards its upper limit by `direction` +1. With `pitch` (rad) the hand
-    is palm-down, fingers along `yaw_body`'s x axis tilted down by `pitch`, and comes in
-    from `approach` (a direction in `yaw_body`'s frame); without, it hangs its fingers
-    beside the tip and comes down from above."""
-
-    body: str
-    tip: tuple[float, float, float]
-    hinge: str
-    direction: float = 1.0
-    pitch: float | None = None
-    yaw_body: str | None = None
-    approach: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
 
 class TurnExpert:
@@ -56,8 +38,12 @@ class TurnExpert:
         self.adapter = ActionAdapter(env)
         model = env.scene.model
         self._palm, self._tips = palm_and_finger_sites(env, side)
-        self._hinge_body = model.body(model.joint(plan.hinge).bodyid[0]).name
-        self._hinge_axis = tuple(model.joint(plan.hinge).axis)
+        info = env.task.objects[plan.obj]
+        self.body, self.tip = locate(env.task.objects, plan.obj, plan.tip)
+        self.frame = info.root
+        hinge = plan.hinge or next(iter(info.joints))
+        self._hinge_body = model.body(model.joint(hinge).bodyid[0]).name
+        self._hinge_axis = tuple(model.joint(hinge).axis)
         n = env.num_envs
         self.pos = np.zeros((n, 3))
         self.rot = np.repeat(np.eye(3)[None], n, axis=0)
@@ -74,7 +60,7 @@ class TurnExpert:
 
     def act(self) -> torch.Tensor:
         view = self.env.view
-        tip = view.point_pos(self.plan.body, self.plan.tip).numpy()
+        tip = view.point_pos(self.body, self.tip).numpy()
         pivot = view.body_pos(self._hinge_body).numpy()
         axis = view.axis(self._hinge_body, self._hinge_axis).numpy()
         radial = tip - pivot
@@ -87,10 +73,9 @@ class TurnExpert:
             rot = palm_down(yaw) @ pitch_down(np.pi / 2)
             approach = np.array([0.0, 0.0, 1.0])
         else:
-            frame = self.plan.yaw_body or self.plan.body
-            rot = palm_down(body_yaw(view.body_quat(frame).numpy())) @ pitch_down(
+            rot = palm_down(body_yaw(view.body_quat(self.frame).numpy())) @ pitch_down(
                 self.plan.pitch)
-            approach = view.axis(frame, self.plan.approach).numpy()
+            approach = view.axis(self.frame, self.plan.approach).numpy()
         beside = tip - BESIDE * tangent
         ahead = tip + LEAD * tangent
         pads_world = np.einsum("nij,nj->ni", rot, self.pads)

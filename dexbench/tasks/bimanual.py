@@ -8,9 +8,12 @@ import mujoco
 
 from dexbench.assets import objects
 from dexbench.assets.objects import ObjectInfo
+from dexbench.tasks.catalog import register
+from dexbench.tasks.plans import TwoHandPlan
 from dexbench.tasks.templates import LiftTask, Placement
 
 
+@register
 class BimanualLiftTray(LiftTask):
     name = "BimanualLiftTray"
     category = "bimanual"
@@ -23,6 +26,11 @@ class BimanualLiftTray(LiftTask):
     default_embodiment = "bimanual_floating_shadow"
     placements: ClassVar = {"tray": Placement((0.02, 0.08), (-0.10, 0.10), (-0.2, 0.2))}
     lifted, lift_threshold, max_tilt = "tray", 0.20, 10.0
+    # Each hand hooks one short rim wall, fingers along the tray's long axis. Centred
+    # between the fingers, the tray hangs ~5 deg low on the thumb side; with its centre
+    # line 3 cm towards the little finger (hand frame y = +0.03) it hangs level.
+    expert = TwoHandPlan("tray", {"right": "grip_xneg", "left": "grip_xpos"},
+                         shift=(0.0, 0.043, 0.0))
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"tray": objects.add_tray(spec, "tray")}

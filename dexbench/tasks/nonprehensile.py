@@ -12,11 +12,24 @@ import torch
 from dexbench.assets import objects
 from dexbench.assets.objects import ObjectInfo
 from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.task_api import SceneView
+from dexbench.tasks.catalog import register
+from dexbench.tasks.plans import PushPlan
 from dexbench.tasks.templates import Placement, TabletopTask
 
 T_REGION = Placement((-0.41, 0.09), (-0.35, 0.15), (0.0, 2 * math.pi))
 GRID_STEP = 0.006  # m, spacing of the points that measure footprint overlap (~500 points)
+PUSH_DONE_OVERLAP = 0.95  # the expert stops pushing well inside the 90% success needs
+
+
+def _goal_pose(env: DexEnv) -> np.ndarray:
+    """The sampled planar goal (x, y, yaw) of the pushed block's frame."""
+    return env.view.goal[:, :3].cpu().numpy()
+
+
+def _pushed(env: DexEnv) -> np.ndarray:
+    return (env.task.overlap(env.view) >= PUSH_DONE_OVERLAP).cpu().numpy()
 
 
 def yaw_of(quat: torch.Tensor) -> torch.Tensor:
@@ -31,6 +44,7 @@ def _rotate2(xy: torch.Tensor, yaw: torch.Tensor) -> torch.Tensor:
     return torch.stack([c * xy[..., 0] - s * xy[..., 1], s * xy[..., 0] + c * xy[..., 1]], -1)
 
 
+@register
 class PushT(TabletopTask):
     """Overlap is measured on a grid of points covering the goal T's footprint."""
 
@@ -43,6 +57,8 @@ class PushT(TabletopTask):
     episode_seconds = 15.0
     placements: ClassVar = {"tee": T_REGION}
     overlap_threshold = 0.90
+    expert = PushPlan("tee", objects.T_SHAPE_RECTS, 2 * objects.T_THICKNESS, _goal_pose,
+                      _pushed)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         built = {"tee": objects.add_t_shape(spec, "tee"),

@@ -43,21 +43,18 @@ def dist(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
 
 
 def zone_touched(view: SceneView, zone: Zone) -> torch.Tensor:
-    """(N,) True where any hand link reaches into a "do not touch" zone.
-
-    Every hand collision geom counts, not only fingertips: a geom touches when its
-    centre lies inside the zone grown by the geom's thickness.
-    """
-    centre = view.point_pos(zone.body, zone.pos)[:, None]
-    rel = view.hand_geom_pos() - centre
-    grow = view.hand_geom_thickness.to(rel.dtype)
+    """(N,) True where a hand touches the object inside a "do not touch" zone: a contact
+    between any hand geom and the zone's body whose contact point lies in the zone."""
+    found, pos = view.zone_contacts(zone)
+    rel = pos - view.point_pos(zone.body, zone.pos)[:, None]
     if zone.kind == "sphere":
-        return (rel.norm(dim=-1) < zone.radius + grow).any(dim=1)
-    axis = view.axis(zone.body, zone.axis)[:, None]
-    along = (rel * axis).sum(dim=-1)
-    radial = (rel - along[..., None] * axis).norm(dim=-1)
-    inside = (along.abs() < zone.half_length + grow) & (radial < zone.radius + grow)
-    return inside.any(dim=1)
+        inside = rel.norm(dim=-1) <= zone.radius
+    else:
+        axis = view.axis(zone.body, zone.axis)[:, None]
+        along = (rel * axis).sum(dim=-1)
+        radial = (rel - along[..., None] * axis).norm(dim=-1)
+        inside = (along.abs() <= zone.half_length) & (radial <= zone.radius)
+    return (found & inside).any(dim=1)
 
 
 def deg(value: float) -> float:

@@ -11,13 +11,25 @@ import torch
 
 from dexbench.assets import articulated, objects, procedural
 from dexbench.assets.objects import ObjectInfo, add_free_box
+from dexbench.envs.arena import BACKDROP_HALF_SIZE
+from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.task_api import SceneView
-from dexbench.tasks.predicates import dist, progress, xy_dist
-from dexbench.tasks.templates import LiftTask, Placement, TabletopTask, uniform_points
+from dexbench.tasks.catalog import register
+from dexbench.tasks.plans import GraspPlan, PressPlan, StackItem, StackLiftPlan, TurnPlan, task_goal
+from dexbench.tasks.predicates import dist, xy_dist
+from dexbench.tasks.templates import (
+    SPEED_NOTE,
+    ArticulatedTask,
+    LiftTask,
+    Placement,
+    TabletopTask,
+    uniform_points,
+)
 
 CENTRE = Placement(x=(-0.10, 0.10), y=(-0.15, 0.15))
 
 
+@register
 class PickCube(LiftTask):
     name = "PickCube"
     category = "primitive"
@@ -26,11 +38,19 @@ class PickCube(LiftTask):
     success_text = "The cube is lifted at least 0.20 m above its resetting height."
     placements: ClassVar = {"cube": CENTRE}
     lifted, lift_threshold = "cube", 0.20
+    expert = GraspPlan("cube")
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"cube": add_free_box(spec, "cube", [0.025] * 3, 0.1)}
 
 
+def _on_base_cube(env: DexEnv) -> np.ndarray:
+    """Where the carried cube's centre goes: 2 mm above resting on the base cube."""
+    height = 2 * env.task.half + 0.002
+    return env.view.body_pos("base_cube").cpu().numpy() + [0.0, 0.0, height]
+
+
+@register
 class StackCube(TabletopTask):
     name = "StackCube"
     category = "primitive"
@@ -42,6 +62,7 @@ class StackCube(TabletopTask):
                                                                    (-0.20, 0.20), clearance=0.05)}
     half = 0.025
     xy_tol, z_tol, max_speed = 0.035, 0.025, 0.05
+    expert = GraspPlan("cube", target=_on_base_cube, release=True)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"cube": add_free_box(spec, "cube", [self.half] * 3, 0.1),
@@ -67,6 +88,7 @@ class StackCube(TabletopTask):
         return view.body_pos("cube")
 
 
+@register
 class RelocateSphere(TabletopTask):
     name = "RelocateSphere"
     category = "primitive"
@@ -75,12 +97,11 @@ class RelocateSphere(TabletopTask):
                    "target location.")
     success_text = "The sphere comes within 0.03 m of a goal point sampled once per episode."
     placements: ClassVar = {"sphere": CENTRE}
-    goal_marker = "goal"
-    tolerance = 0.03
+    tolerance = goal_marker = 0.03
+    expert = GraspPlan("sphere", shift=(0.025, 0.0, 0.0), yaw="none", target=task_goal)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
-        return {"sphere": objects.add_sphere(spec, "sphere", radius=0.03, mass=0.1),
-                "goal": objects.add_goal_marker(spec, "goal", radius=self.tolerance)}
+        return {"sphere": objects.add_sphere(spec, "sphere", radius=0.03, mass=0.1)}
 
     def sample_goal(self, rngs: list[np.random.Generator]) -> np.ndarray:
         return uniform_points(rngs, (-0.15, 0.15), (-0.20, 0.20), (0.05, 0.20))
@@ -92,6 +113,7 @@ class RelocateSphere(TabletopTask):
         return 1.0 - dist(view.body_pos("sphere"), view.goal) / 0.4
 
 
+@register
 class PickUpStick(LiftTask):
     name = "PickUpStick"
     category = "primitive"
@@ -102,11 +124,15 @@ class PickUpStick(LiftTask):
                     "within 30° of vertical.")
     placements: ClassVar = {"stick": CENTRE}
     lifted, lift_threshold, max_tilt = "stick", 0.20, 30.0
+    # Thin and upright: held 3 cm below its top, the palm a little lower than for a cube.
+    expert = GraspPlan("stick", point=("top", (0.0, 0.0, -0.032)), shift=(0.01, 0.0, -0.02),
+                       yaw="none")
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"stick": objects.add_stick(spec, "stick")}
 
 
+@register
 class RelocateObject(TabletopTask):
     name = "RelocateObject"
     category = "primitive"
@@ -116,12 +142,13 @@ class RelocateObject(TabletopTask):
     success_text = ("The object is moved to within 0.03 m of a sampled goal point, roughly "
                     "within 0.2 m of table center and 0.15-0.25 m above the table.")
     placements: ClassVar = {"bottle": CENTRE}
-    goal_marker = "goal"
-    tolerance = 0.03
+    tolerance = goal_marker = 0.03
+    # Tall: fingers tilted down so they straddle the shoulder instead of landing on the cap.
+    expert = GraspPlan("bottle", point=("top", (0.0, 0.0, -0.06)), shift=(0.01, 0.0, 0.0),
+                       yaw="none", pitch=0.6, target=task_goal, goal_point="centre")
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
-        return {"bottle": procedural.add_bottle(spec, "bottle"),
-                "goal": objects.add_goal_marker(spec, "goal", radius=self.tolerance)}
+        return {"bottle": procedural.add_bottle(spec, "bottle")}
 
     def sample_goal(self, rngs: list[np.random.Generator]) -> np.ndarray:
         out = []
@@ -133,8 +160,7 @@ class RelocateObject(TabletopTask):
         return pts
 
     def _centre(self, view: SceneView) -> torch.Tensor:
-        body, pos = self.objects["bottle"].points["centre"]
-        return view.point_pos(body, pos)
+        return self.point(view, "bottle", "centre")
 
     def success(self, view: SceneView) -> torch.Tensor:
         return dist(self._centre(view), view.goal) <= self.tolerance
@@ -143,24 +169,8 @@ class RelocateObject(TabletopTask):
         return 1.0 - dist(self._centre(view), view.goal) / 0.4
 
 
-class _Articulated(TabletopTask):
-    """One articulated object; success when its joint covers `threshold` of its travel."""
-
-    joint: ClassVar[str]
-    threshold: ClassVar[float]
-
-    def _progress(self, view: SceneView) -> torch.Tensor:
-        lo, hi = self.joint_range(self.joint)
-        return progress(view.joint_pos(self.joint), self.initial_joints[self.joint], lo, hi)
-
-    def success(self, view: SceneView) -> torch.Tensor:
-        return self._progress(view) >= self.threshold
-
-    def progress(self, view: SceneView) -> torch.Tensor:
-        return self._progress(view) / self.threshold
-
-
-class TurnOnSwitch(_Articulated):
+@register
+class TurnOnSwitch(ArticulatedTask):
     name = "TurnOnSwitch"
     category = "primitive"
     instruction = "Turn on the switch."
@@ -168,31 +178,30 @@ class TurnOnSwitch(_Articulated):
     success_text = "The switch moves at least 80% of its reachable travel from its reset position."
     placements: ClassVar = {"switch": Placement((0.0, 0.15), (-0.15, 0.15), (-0.3, 0.3))}
     joint = "switch/rocker"
-    threshold = 0.8
+    # Fingertips, tilted down, on the paddle's "on" end: it rocks over.
+    expert = PressPlan("switch", "press", pitch=math.radians(50))
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
-        info = articulated.add_switch(spec, "switch")
-        self.initial_joints = {self.joint: info.joints[self.joint][0]}
-        return {"switch": info}
+        return {"switch": articulated.add_switch(spec, "switch")}
 
 
-class PushButton(_Articulated):
+@register
+class PushButton(ArticulatedTask):
     name = "PushButton"
     category = "primitive"
     instruction = "Press the button."
     description = "Move the fingertip or hand into an articulated button and press it down."
     success_text = "The button is pressed at least 80% of its roughly 0.015 m travel."
     placements: ClassVar = {"button": Placement((-0.05, 0.15), (-0.15, 0.15))}
-    joint = "button/press"
-    threshold = 0.8
+    joint, reset_at = "button/press", "upper"
+    expert = PressPlan("button", "cap", with_fingers=False)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
-        info = articulated.add_button(spec, "button")
-        self.initial_joints = {self.joint: 0.0}
-        return {"button": info}
+        return {"button": articulated.add_button(spec, "button")}
 
 
-class OpenFaucet(_Articulated):
+@register
+class OpenFaucet(ArticulatedTask):
     name = "OpenFaucet"
     category = "primitive"
     instruction = "Turn the faucet handle to open the faucet."
@@ -201,26 +210,42 @@ class OpenFaucet(_Articulated):
     success_text = "The handle is turned at least 80° from its reset angle."
     placements: ClassVar = {"faucet": Placement((0.3, 0.5), (-0.2, 0.2), (math.pi - 0.3,
                                                                            math.pi + 0.3))}
-    joint = "faucet/handle"
-    turn_deg = 80.0
+    joint, min_turn = "faucet/handle", math.radians(80.0)
+    expert = TurnPlan("faucet", "handle_tip")
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
-        info = articulated.add_faucet(spec, "faucet")
-        self.initial_joints = {self.joint: info.joints[self.joint][0]}
-        return {"faucet": info}
-
-    def _turned(self, view: SceneView) -> torch.Tensor:
-        return torch.rad2deg((view.joint_pos(self.joint) - self.initial_joints[self.joint]).abs())
-
-    def success(self, view: SceneView) -> torch.Tensor:
-        return self._turned(view) >= self.turn_deg
-
-    def progress(self, view: SceneView) -> torch.Tensor:
-        return self._turned(view) / self.turn_deg
+        return {"faucet": articulated.add_faucet(spec, "faucet")}
 
 
+# The standing cylinder is the first choice of base: a pinched cylinder hangs tilted and
+# topples off a box or prism, while a box or prism set on the cylinder stays, and the
+# tall cylinder gives the side grasp's thumb and index finger the most to hold.
+STACK_ITEMS: dict[str, StackItem] = {
+    "box": StackItem(yaw="box", base=1, period=np.pi / 2),
+    # Lying: 4 cm wide along its x, 9 cm long; pinched across its width, 2 cm off the
+    # cube grasp along the hand's y, where it hangs least rolled (about 15 deg, not 30).
+    "prism": StackItem(synergy="pinch", shift=(0.03, 0.02, 0.0), yaw="body", base=2,
+                  period=np.pi, across=True),
+    # Standing: pinched around its middle (only if some other shape became the base).
+    "cylinder": StackItem(synergy="pinch", shift=(0.03, 0.0, 0.0), base=0),
+    "ball": StackItem(shift=(0.025, 0.0, 0.0)),
+    # Lying along its x: held in a power grasp with the fingers along its axis, so it
+    # sits level (a pinch left a fingertip below it, which tipped the base over) and
+    # slides along its axis rather than rolling as the hand lets go; on the base it
+    # lies along the side grasp's fingers, not into the palm, which would push it off.
+    "capsule": StackItem(shift=(0.025, 0.0, 0.0), yaw="body", base=3, period=np.pi),
+}
+
+
+# Hand poses that start the side grasp: open fingers, the thumb turned towards the palm
+# (opposing the fingers, as in `power`) but not flexed, so it slides in under the base.
+SIDE_READY: dict[str, dict[str, float]] = {"shadow": {"A_THJ4": 1.22}}
+
+
+@register
 class GraspTwoItems(TabletopTask):
-    """Five candidate shapes exist; each episode two are on the table, three parked."""
+    """Five candidate shapes exist; each episode two are on the table, three parked
+    outside the backdrop's walls, which hide them from every camera."""
 
     name = "GraspTwoItems"
     category = "primitive"
@@ -231,8 +256,11 @@ class GraspTwoItems(TabletopTask):
                     "are lifted at least 0.20 m above the tabletop at the same time.")
     candidates = ("box", "ball", "cylinder", "capsule", "prism")
     placements: ClassVar = {n: Placement((-0.15, 0.15), (-0.25, 0.25)) for n in candidates}
+    deviations = (SPEED_NOTE,)
     lift_threshold = 0.20
-    parking_x = 1.5  # unselected shapes rest on the floor, out of reach, off camera
+    parking_x = BACKDROP_HALF_SIZE + 0.5  # unselected shapes rest on the floor out there
+    contact_objects = candidates
+    expert = StackLiftPlan(candidates, STACK_ITEMS, SIDE_READY)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return objects.add_primitive_set(spec, self.candidates)
@@ -251,7 +279,8 @@ class GraspTwoItems(TabletopTask):
         return torch.stack([self.lift(view, n) for n in self.candidates], dim=1)
 
     def success(self, view: SceneView) -> torch.Tensor:
-        return (self._lifts(view) >= self.lift_threshold).sum(dim=1) >= 2
+        slow = torch.stack([self.slow(view, n) for n in self.candidates], dim=1)
+        return ((self._lifts(view) >= self.lift_threshold) & slow).sum(dim=1) >= 2
 
     def progress(self, view: SceneView) -> torch.Tensor:
         top2 = self._lifts(view).topk(2, dim=1).values.clamp(0.0, self.lift_threshold)

@@ -1,4 +1,5 @@
-"""GraspTwoItems: stack one item on the other, then lift the stack in one side grasp.
+"""Stack and lift (`StackLiftPlan`): stack one item on the other, then lift the stack
+in one side grasp.
 
 No single grasp holds two of the shapes lying side by side or in line: the fingers
 squeeze against the thumb along one axis, so the second item has nothing opposing it.
@@ -18,7 +19,6 @@ sometimes falls off while the hand comes round for the side grasp.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import IntEnum
 
 import mujoco
@@ -27,11 +27,11 @@ import torch
 
 from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.embodiments.hand_geometry import thumb_actuators
-from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, step_towards, wrap, yawed
+from dexbench.tasks.plans import StackLiftPlan
 
 
 class Stage(IntEnum):
@@ -49,47 +49,6 @@ class Stage(IntEnum):
     DROP = 11  # something fell: open, back off, start over
 
 
-@dataclass(frozen=True)
-class Item:
-    """How the script picks up one shape and stacks it.
-
-    `point` (body frame) and `shift` (hand frame) place the top-down grasp closing
-    `synergy`, as in `GraspPlan`; `yaw` is "box" (faces, folded by 90 deg), "body" (its
-    x axis, folded by 180 deg, turned by `yaw_offset`) or "none": the fingers' heading.
-    `base` ranks flat-topped shapes as the stack's bottom (lower first; None: round,
-    nothing stays on it); `period` is the yaw symmetry (rad) to line it up on the base
-    (None: any yaw will do), `across` turns its x axis across the side grasp's fingers.
-    """
-
-    synergy: str = "power"
-    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    yaw: str = "none"
-    yaw_offset: float = 0.0
-    base: int | None = None
-    period: float | None = None
-    across: bool = False
-
-
-# The standing cylinder is the first choice of base: a pinched cylinder hangs tilted and
-# topples off a box or prism, while a box or prism set on the cylinder stays, and the
-# tall cylinder gives the side grasp's thumb and index finger the most to hold.
-ITEMS: dict[str, Item] = {
-    "box": Item(yaw="box", base=1, period=np.pi / 2),
-    # Lying: 4 cm wide along its x, 9 cm long; pinched across its width, 2 cm off the
-    # cube grasp along the hand's y, where it hangs least rolled (about 15 deg, not 30).
-    "prism": Item(synergy="pinch", shift=(0.03, 0.02, 0.0), yaw="body", base=2,
-                  period=np.pi, across=True),
-    # Standing: pinched around its middle (only if some other shape became the base).
-    "cylinder": Item(synergy="pinch", shift=(0.03, 0.0, 0.0), base=0),
-    "ball": Item(shift=(0.025, 0.0, 0.0)),
-    # Lying along its x: held in a power grasp with the fingers along its axis, so it
-    # sits level (a pinch left a fingertip below it, which tipped the base over) and
-    # slides along its axis rather than rolling as the hand lets go; on the base it
-    # lies along the side grasp's fingers, not into the palm, which would push it off.
-    "capsule": Item(shift=(0.025, 0.0, 0.0), yaw="body", base=3, period=np.pi),
-}
-
 # Side grasp of the stack's base: the top-down grasp rolled about the fingers by
 # SIDE_ROLL (rad) so the thumb side goes down, the base held SIDE_SHIFT (hand frame)
 # towards the index finger from the top-down cube grasp and the hand SIDE_RISE higher,
@@ -97,10 +56,6 @@ ITEMS: dict[str, Item] = {
 SIDE_ROLL = 1.4
 SIDE_SHIFT = (0.0, -0.02, 0.0)
 SIDE_RISE = 0.01
-# Hand poses that start the side grasp: open fingers, the thumb turned towards the palm
-# (opposing the fingers, as in `power`) but not flexed, so it slides in under the base.
-SIDE_READY: dict[str, dict[str, float]] = {"shadow": {"A_THJ4": 1.22}}
-
 APPROACH_HEIGHT = 0.10  # m behind the palm of a grasp pose
 TRAVEL_RISE = 0.10  # m the hand rises before travelling across
 SPEED = 0.45  # m/s in free space
@@ -130,15 +85,16 @@ LIFT_CHECK = 0.08  # m: once the hand rose this far, both items must have come a
 LIFTED = 0.03  # m above its rest height an item counts as coming along
 
 
-class TwoItemsExpert:
-    """Stack-and-lift phase machine for the right hand of a GraspTwoItems env."""
+class StackLiftExpert:
+    """Stack-and-lift phase machine for the right hand (GraspTwoItems)."""
 
-    def __init__(self, env: DexEnv, side: str = "right") -> None:
+    def __init__(self, env: DexEnv, plan: StackLiftPlan, side: str = "right") -> None:
         self.env, self.side = env, side
         self.adapter = ActionAdapter(env)
-        hand = env.embodiment.name.rsplit("_", 1)[1]
-        self.offset = np.asarray(HANDS[hand].grasp_offset)
-        self.names = list(env.task.candidates)
+        self.items = plan.items
+        hand = env.embodiment.hand
+        self.offset = np.asarray(hand.grasp_offset)
+        self.names = list(plan.candidates)
         self.rest = np.array([env.task.objects[n].rest_height for n in self.names])
         model = env.scene.model
         self._palm_site = model.site(env.embodiment.sides[side].palm_site).id
@@ -147,7 +103,8 @@ class TwoItemsExpert:
         self._hand = emb.hand_actuators(side)
         self._open = emb.poses["open"][self._hand]
         self._power = emb.poses["power"][self._hand]
-        self._closed = {name: emb.poses[ITEMS[name].synergy][self._hand] for name in self.names}
+        self._closed = {name: emb.poses[self.items[name].synergy][self._hand]
+                        for name in self.names}
         self._ready = self._open.copy()
         layout = emb.sides[side]
         self._thumb = thumb_actuators(model, model.site(layout.palm_site).bodyid[0],
@@ -155,7 +112,7 @@ class TwoItemsExpert:
         low, high = emb.ctrl_range[self._hand].T
         for k, i in enumerate(self._hand):
             name = emb.actuators[i].rsplit("_", 2)[-2:]
-            target = SIDE_READY.get(hand, {}).get("_".join(name))
+            target = plan.side_ready.get(hand.name, {}).get("_".join(name))
             if target is not None:
                 self._ready[k] = np.clip(target, low[k], high[k])
         bodies = [model.body(env.task.objects[name].root).id for name in self.names]
@@ -196,7 +153,8 @@ class TwoItemsExpert:
     def _choose(self, ids: np.ndarray, items: np.ndarray) -> None:
         """The two shapes on the table (nearest its centre); the better base stays put."""
         near = np.argsort(np.linalg.norm(items[:, :, :2], axis=2), axis=1)[:, :2]
-        rank = np.array([99 if ITEMS[n].base is None else ITEMS[n].base for n in self.names])
+        rank = np.array([99 if self.items[n].base is None else self.items[n].base
+                         for n in self.names])
         first_is_base = rank[near[:, 0]] <= rank[near[:, 1]]
         self.base[ids] = np.where(first_is_base, near[:, 0], near[:, 1])[ids]
         self.top[ids] = np.where(first_is_base, near[:, 1], near[:, 0])[ids]
@@ -207,7 +165,7 @@ class TwoItemsExpert:
         yaws their symmetry allows, the one nearest `toward` (N,) (default 0)."""
         out = np.zeros(len(shape)) if toward is None else toward.copy()
         for k, name in enumerate(self.names):
-            item, mine = ITEMS[name], shape == k
+            item, mine = self.items[name], shape == k
             fold = {"box": np.pi / 2, "body": np.pi}.get(item.yaw)
             if fold is not None:
                 base = yaw[mine] + item.yaw_offset
@@ -216,7 +174,7 @@ class TwoItemsExpert:
 
     def _pick_pose(self, i: int, items: np.ndarray, yaws: np.ndarray, turn: bool) -> None:
         """Grasp pose of env i's top item; its yaw is planned if `turn`, else kept."""
-        item = ITEMS[self.names[self.top[i]]]
+        item = self.items[self.names[self.top[i]]]
         yaw = yaws[i, self.top[i]]
         if turn:
             # Fingers towards the base: the forearm then stays clear of it.
@@ -387,7 +345,7 @@ class TwoItemsExpert:
         half = LET_GO_SECONDS / 2
         first = np.clip(1.0 - self.timer / half, 0.0, 1.0)
         second = np.clip(2.0 - self.timer / half, 0.0, 1.0)
-        thumb_first = np.array([ITEMS[self.names[t]].synergy == "power" for t in self.top])
+        thumb_first = np.array([self.items[self.names[t]].synergy == "power" for t in self.top])
         thumb_c, finger_c = np.where(thumb_first, first, second), np.where(thumb_first,
                                                                            second, first)
         closure[release] = np.where(self._thumb, thumb_c[:, None],
@@ -422,7 +380,7 @@ class TwoItemsExpert:
 
     def _place_turn(self, i: int, yaws: np.ndarray) -> float:
         """Yaw (rad) the hand turns while carrying so the top item lines up on the base."""
-        item = ITEMS[self.names[self.top[i]]]
+        item = self.items[self.names[self.top[i]]]
         if item.period is None:
             return 0.0
         desired = self._side_yaw(yaws)[i] + (np.pi / 2 if item.across else 0.0)

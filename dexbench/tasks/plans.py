@@ -1,0 +1,282 @@
+"""Expert plans as data: how a task's scripted expert solves it, written next to the task.
+
+A task's `expert` is one of these plan kinds (or a `SequencePlan` of them);
+`dexbench.experts` holds one closed-loop script per kind and runs the plan on any hand
+and mount. Plans name objects by their keys in the task's `objects` and points by
+their `ObjectInfo.points` names, so object geometry is never restated here: a
+`PointRef` is a point name, a point name and an offset in that point's body frame, or
+an offset from the object's root.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from dexbench.assets.objects import ObjectInfo, Vec3
+from dexbench.envs.dex_env import DexEnv
+
+PointRef = str | Vec3 | tuple[str, Vec3]
+EnvFn = Callable[[DexEnv], np.ndarray]
+
+
+def locate(objects: Mapping[str, ObjectInfo], obj: str, ref: PointRef) -> tuple[str, Vec3]:
+    """(body, point in its frame) of a `PointRef` on object `obj`."""
+    info = objects[obj]
+    if isinstance(ref, str):
+        return info.points[ref]
+    if isinstance(ref[0], str):
+        body, base = info.points[ref[0]]
+        return body, tuple(float(b + o) for b, o in zip(base, ref[1], strict=True))
+    return info.root, tuple(float(v) for v in ref)
+
+
+def body_yaw(quat: np.ndarray) -> np.ndarray:
+    """(N,) yaw about world z of bodies with orientations `quat` (N, 4) (w, x, y, z)."""
+    w, x, y, z = quat.T
+    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles (rad) wrapped into [-pi, pi)."""
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+def turnable_offset(body: str, final_yaw: EnvFn, offsets: tuple[float, float]) -> EnvFn:
+    """Grasp yaw offsets (N,) from `body`'s yaw, one of two `offsets` (rad): the one from
+    which the hand's turn that brings the body to `final_yaw(env)` keeps the hand's yaw
+    within +-pi (a floating wrist's yaw joint stops there)."""
+    def offset(env: DexEnv) -> np.ndarray:
+        yaw = body_yaw(env.view.body_quat(body).cpu().numpy())
+        turn = wrap(final_yaw(env) - yaw)
+        return np.where(np.abs(wrap(yaw + offsets[0]) + turn) < np.pi, *offsets)
+    return offset
+
+
+def handle_between(body: str, lo: float, hi: float) -> EnvFn:
+    """Grasp yaw offsets (N,) from `body`'s yaw (its handle along body +x) that put the
+    handle between `lo` and `hi` (rad, `lo` < `hi` < `lo` + 2 pi; from the fingers'
+    direction towards the palm's facing direction; the handle cannot lie between the
+    palm and the vessel), the fingers along world +x where the handle allows it, else
+    the nearer end: a hand reaching far round to the side or back towards its own base
+    turns the vessel poorly."""
+    def offset(env: DexEnv) -> np.ndarray:
+        past_lo = (body_yaw(env.view.body_quat(body).cpu().numpy()) - lo) % (2 * np.pi)
+        nearer_lo = past_lo - (hi - lo) > 2 * np.pi - past_lo
+        rel = np.where(past_lo <= hi - lo, lo + past_lo, np.where(nearer_lo, lo, hi))
+        return -rel
+    return offset
+
+
+def task_goal(env: DexEnv) -> np.ndarray:
+    """The goal point the task sampled this episode."""
+    return env.view.goal[:, :3].cpu().numpy()
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """Grasp-and-move: where and how to hold object `obj`, and where to take it.
+
+    `point` is the grasp point, `shift` moves it in the hand frame from where the hand
+    holds a 5 cm cube (its `grasp_offset`) to suit the object's size; `side` grasps
+    (upright cylinders) hold it in a handshake pose instead of from above, `pitch` (rad)
+    tilts the fingers down from the top grasp (90 deg: hanging, palm towards the object,
+    to hook a handle). `yaw` is "box" (the object's face yaw nearest to the approach),
+    "body" (the object's yaw) or "none", turned further by `yaw_offset` (rad, or
+    `yaw_offset(env) -> (N,)`). `settle` (s) replaces the closed hand's default wait.
+    After the grasp the object is lifted `lift` metres, or, with `target(env) -> (N, 3)`,
+    carried until its `goal_point` is there; with `release`, the hand then opens and
+    backs off (placing), as it does whenever `let_go(env) -> (N,) bool` holds while
+    carrying. `carry_high` lifts the object over the table's clutter until it is above
+    its target (off for pulling).
+    """
+
+    obj: str
+    point: PointRef = (0.0, 0.0, 0.0)
+    shift: Vec3 = (0.0, 0.0, 0.0)
+    yaw: str = "box"
+    yaw_offset: float | EnvFn = 0.0
+    side: bool = False
+    pitch: float = 0.0
+    synergy: str = "power"
+    lift: float = 0.28
+    target: EnvFn | None = None
+    goal_point: PointRef = (0.0, 0.0, 0.0)
+    release: bool = False
+    let_go: EnvFn | None = None
+    carry_high: bool = True
+    settle: float | None = None
+
+
+@dataclass(frozen=True)
+class LevelPlan:
+    """`grasp`, whose carry also pitches the hand fingers-down (up to `max_angle` rad, at
+    `rate` rad/s) as far as keeps the held object's `axis` tilted `tilt` deg while
+    `active(env)` holds: an object held by one end sags."""
+
+    grasp: GraspPlan
+    axis: str
+    tilt: float
+    active: EnvFn
+    rate: float = 0.5
+    max_angle: float = 0.8
+
+
+@dataclass(frozen=True)
+class PressPlan:
+    """Press `point` of `obj` from above; `with_fingers` presses with the mean fingertip
+    rather than the palm; `yaw` turns the fingers (rad) from the point's body x axis,
+    `pitch` tilts them down (rad) so only the tips touch."""
+
+    obj: str
+    point: PointRef
+    with_fingers: bool = True
+    yaw: float = 0.0
+    pitch: float = 0.0
+
+
+@dataclass(frozen=True)
+class TurnPlan:
+    """Push the `tip` point of `obj`'s hinged part along its arc, about `obj`'s joint
+    `hinge` (default: its only joint), towards the joint's upper limit for `direction`
+    +1. With `pitch` (rad) the hand is palm-down, fingers along the object root's x axis
+    tilted down by `pitch`, and comes in from `approach` (a direction in the root's
+    frame); without, it hangs its fingers beside the tip and comes down from above."""
+
+    obj: str
+    tip: PointRef
+    hinge: str | None = None
+    direction: float = 1.0
+    pitch: float | None = None
+    approach: Vec3 = (0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class PushPlan:
+    """Push the flat block `obj` (footprint `rects`, (cx, cy, hx, hy) in its frame, and
+    `height`) to the planar pose `goal(env) -> (N, 3)` (x, y, yaw) with one fingertip;
+    `done(env) -> (N,) bool`: close enough, the hand lifts off and waits."""
+
+    obj: str
+    rects: Sequence[tuple[float, float, float, float]]
+    height: float
+    goal: EnvFn
+    done: EnvFn
+
+
+@dataclass(frozen=True)
+class TwoHandPlan:
+    """Both hands hook one grip point of `obj` each (`grips`: side -> point name) and lift
+    it together. `shift` moves the grip point in the right hand's frame from where the
+    hand holds a 5 cm cube (mirrored for a mirrored hand); `pull` (m) is how far the
+    closed hands draw back along their fingers, `lift` (m) how high they then rise."""
+
+    obj: str
+    grips: Mapping[str, str]
+    shift: Vec3 = (0.0, 0.0, 0.0)
+    pull: float = 0.025
+    lift: float = 0.27
+
+
+@dataclass(frozen=True)
+class InsertPlan:
+    """Insert the held `peg` (its `head` point and `shaft` axis) into `hole` (its
+    `entrance` and `target` points and `bore` axis, pointing out of the hole)."""
+
+    peg: str
+    hole: str
+    head: str = "head"
+    shaft: str = "shaft"
+    entrance: str = "entrance"
+    target: str = "target"
+    bore: str = "bore"
+
+
+@dataclass(frozen=True)
+class PourPlan:
+    """`grasp` holds and carries the vessel (its `goal_point`: the rim). Once the hand has
+    risen `clearance` (m) it turns, at `turn_rate` (rad/s), by `tilt` (rad) about `about`
+    (hand frame; z: the palm normal). The fingers close `squeeze` times as far as
+    `grasp.synergy` (within the actuators' ranges), but the actuators matching a regex
+    of `overrides` go to its target instead. `grasp_turn` (rad, about `about` too) is
+    already there at the grasp; `tilt` is the whole turn, `grasp_turn` included."""
+
+    grasp: GraspPlan
+    tilt: float
+    clearance: float = 0.05
+    turn_rate: float = 1.5
+    about: Vec3 = (0.0, 0.0, 1.0)
+    squeeze: float = 1.0
+    overrides: tuple[tuple[str, float], ...] = ()
+    grasp_turn: float = 0.0
+
+
+@dataclass(frozen=True)
+class ReachPlan:
+    """Move the open hand to `target(env, start) -> (N, 3)`, `start` being where the palm
+    was when the step began. Without `yaw` the palm goes there keeping its orientation;
+    with it, the hand turns palm-down, fingers along `yaw` (rad) tilted down by `pitch`,
+    and its finger tips (their mean, thumb left out) go there. Done once arrived."""
+
+    target: Callable[[DexEnv, np.ndarray], np.ndarray]
+    yaw: float | None = None
+    pitch: float = 0.0
+
+
+@dataclass(frozen=True)
+class StackItem:
+    """How the script picks up one shape and stacks it.
+
+    `point` (body frame) and `shift` (hand frame) place the top-down grasp closing
+    `synergy`, as in `GraspPlan`; `yaw` is "box" (faces, folded by 90 deg), "body" (its
+    x axis, folded by 180 deg, turned by `yaw_offset`) or "none": the fingers' heading.
+    `base` ranks flat-topped shapes as the stack's bottom (lower first; None: round,
+    nothing stays on it); `period` is the yaw symmetry (rad) to line it up on the base
+    (None: any yaw will do), `across` turns its x axis across the side grasp's fingers.
+    """
+
+    synergy: str = "power"
+    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    yaw: str = "none"
+    yaw_offset: float = 0.0
+    base: int | None = None
+    period: float | None = None
+    across: bool = False
+
+
+@dataclass(frozen=True)
+class StackLiftPlan:
+    """Lift two of the task's `candidates` at once by stacking one on the other and
+    lifting the stack in one side grasp; `items` says how to pick up and stack each
+    shape; `side_ready` (hand name -> actuator suffix -> target) opens a hand for the
+    side grasp."""
+
+    candidates: Sequence[str]
+    items: Mapping[str, StackItem]
+    side_ready: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+
+
+Until = Callable[[DexEnv, Any], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a sequence: `plan` runs until `until(env, its expert) -> (N,) bool`
+    (default: its expert's `finished`)."""
+
+    plan: Any
+    until: Until | None = None
+
+
+@dataclass(frozen=True)
+class SequencePlan:
+    """Steps run one after another per env, each handing over when its subgoal holds;
+    the last step runs to the end. Where `restart(env, experts) -> (N,) bool` holds (a
+    dropped object), an env starts over."""
+
+    steps: tuple[Step, ...]
+    restart: Callable[[DexEnv, Sequence[Any]], np.ndarray] | None = None
