@@ -319,8 +319,7 @@ def test_paper_protocol_plans_every_hand_on_the_default_mount():
 
 def test_collect_command_protocol_writes_datasets_and_summary(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(PickCube, "lift_threshold", -1.0)
-    monkeypatch.setattr(collect_cli, "embodiment_names",
-                        lambda: ["floating_shadow", "floating_allegro"])
+    monkeypatch.setattr(collect_cli, "same_mount_hands", lambda name: ["floating_allegro"])
 
     def shadow_only(env):
         if env.embodiment.name != "floating_shadow":
