@@ -63,7 +63,8 @@ class DexGymEnv(gym.Env):
     metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 60}
 
     def __init__(self, env: DexEnv, render_mode: str | None = None,
-                 render_size: tuple[int, int] = RENDER_SIZE) -> None:
+                 render_size: tuple[int, int] = RENDER_SIZE, render_shadows: bool = True,
+                 ) -> None:
         if env.num_envs != 1:
             raise ValueError("DexGymEnv wraps a DexEnv with num_envs=1; use DexEnv for batches")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -76,7 +77,9 @@ class DexGymEnv(gym.Env):
         self.env = env
         self.render_mode = render_mode
         self.render_size = tuple(render_size)
-        self.metadata = {**self.metadata, "render_fps": env.physics.control_hz}
+        # An int, as Gymnasium's own envs: video writers take it as a rational.
+        self.metadata = {**self.metadata, "render_fps": round(env.physics.control_hz)}
+        self.render_shadows = render_shadows
         self._renderer = None
         low = env.action_low.cpu().numpy().astype(np.float32)
         high = env.action_high.cpu().numpy().astype(np.float32)
@@ -119,7 +122,8 @@ class DexGymEnv(gym.Env):
             return None
         if self._renderer is None:  # the OpenGL (or ray-tracing) context only when asked for
             kind = "cpu" if isinstance(self.env.sim, CpuBackend) else "warp"
-            self._renderer = make_renderer(self.env.sim, *self.render_size, kind=kind)
+            self._renderer = make_renderer(self.env.sim, *self.render_size, kind=kind,
+                                           shadows=self.render_shadows)
         frames = self._renderer.render([RENDER_CAMERA], rgb=True, depth=False)
         return frames[RENDER_CAMERA].rgb[0].cpu().numpy().copy()
 

@@ -16,14 +16,18 @@ KINDS = {
     "dp": "dexbench.policies.dp.policy",
     "dp3": "dexbench.policies.dp3.policy",
     "expert": "dexbench.policies.expert",
+    "lerobot": "dexbench.policies.vla_adapters.lerobot_policy",
     "openpi": "dexbench.policies.vla_adapters.openpi",
     "openvla_oft": "dexbench.policies.vla_adapters.openvla_oft",
     "rl": "dexbench.policies.rl",
 }
 # Kinds whose model another program serves; their settings say what it is sent.
 SERVED = frozenset({"openpi", "openvla_oft"})
-# Kinds that load no checkpoint here (scripted, or served).
-WITHOUT_CHECKPOINT = SERVED | {"expert"}
+# Kinds whose settings, not a checkpoint, say which model runs (a resumed evaluation must
+# keep them): served kinds, and LeRobot policies loaded from `policy.path`.
+BY_SETTINGS = SERVED | {"lerobot"}
+# Kinds that take no checkpoint= (scripted, served, or loaded from their settings).
+WITHOUT_CHECKPOINT = BY_SETTINGS | {"expert"}
 
 
 def policy_module(kind: str) -> ModuleType:

@@ -54,11 +54,12 @@ def make_env(task: str, embodiment: str | None = None, **kwargs) -> DexEnv:
 
 
 def make_gym_env(task: str, embodiment: str | None = None, render_mode: str | None = None,
-                 render_size: tuple[int, int] = RENDER_SIZE, **kwargs) -> DexGymEnv:
-    """Entry point behind `gymnasium.make("dexbench/<Task>-v0")`: `render_mode` and
-    `render_size` go to the wrapper, the other keyword arguments to `make_env`."""
+                 render_size: tuple[int, int] = RENDER_SIZE, render_shadows: bool = True,
+                 **kwargs) -> DexGymEnv:
+    """Entry point behind `gymnasium.make("dexbench/<Task>-v0")`: the `render_*` arguments
+    go to the wrapper, the other keyword arguments to `make_env`."""
     env = make_env(task, embodiment, num_envs=1, **kwargs)
-    return DexGymEnv(env, render_mode, render_size)
+    return DexGymEnv(env, render_mode, render_size, render_shadows)
 
 
 def register_gym_envs() -> None:
