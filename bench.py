@@ -1,7 +1,6 @@
 """Benchmarks: `python bench.py sim num_envs=64` (see dexbench/cli/bench.py)."""
 
-from dexbench.cli.bench import main
-from dexbench.cli.errors import run_cli
+from dexbench.cli.bench import entry
 
 if __name__ == "__main__":
-    run_cli(main)
+    entry()

@@ -1,7 +1,7 @@
-"""Demonstrations: `python collect.py task=PickCube num_demos=50` (see dexbench/cli/collect.py)."""
+"""Demonstrations: `python collect.py task=PickCube num_demos=50`
+(a Hydra main; see dexbench/cli/collect.py)."""
 
-from dexbench.cli.collect import main
-from dexbench.cli.errors import run_cli
+from dexbench.cli.collect import hydra_entry
 
 if __name__ == "__main__":
-    run_cli(main)
+    hydra_entry()

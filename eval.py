@@ -1,8 +1,7 @@
 """Closed-loop evaluation: `python eval.py +split=baseline19 policy=dp checkpoint=<path>`
-(see dexbench/cli/eval.py)."""
+(see dexbench/cli/eval.py); a Hydra main (`--help`, `-m`, `hydra/launcher=...`)."""
 
-from dexbench.cli.errors import run_cli
-from dexbench.cli.eval import main
+from dexbench.cli.eval import hydra_entry
 
 if __name__ == "__main__":
-    run_cli(main)
+    hydra_entry()

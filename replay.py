@@ -1,7 +1,7 @@
-"""Replay: `python replay.py dataset=<folder> obs=rgb` (see dexbench/cli/replay.py)."""
+"""Replay: `python replay.py dataset=<folder> obs=rgb`
+(a Hydra main; see dexbench/cli/replay.py)."""
 
-from dexbench.cli.errors import run_cli
-from dexbench.cli.replay import main
+from dexbench.cli.replay import hydra_entry
 
 if __name__ == "__main__":
-    run_cli(main)
+    hydra_entry()

@@ -1,7 +1,7 @@
-"""Reinforcement learning: `python rl.py task=PickCube num_envs=4096` (see dexbench/cli/rl.py)."""
+"""Reinforcement learning: `python rl.py task=PickCube num_envs=4096`
+(a Hydra main; see dexbench/cli/rl.py)."""
 
-from dexbench.cli.errors import run_cli
-from dexbench.cli.rl import main
+from dexbench.cli.rl import hydra_entry
 
 if __name__ == "__main__":
-    run_cli(main)
+    hydra_entry()

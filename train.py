@@ -1,7 +1,7 @@
-"""Training: `python train.py policy=dp task=PickCube` (see dexbench/cli/train.py)."""
+"""Training: `python train.py policy=dp task=PickCube`
+(a Hydra main; see dexbench/cli/train.py)."""
 
-from dexbench.cli.errors import run_cli
-from dexbench.cli.train import main
+from dexbench.cli.train import hydra_entry
 
 if __name__ == "__main__":
-    run_cli(main)
+    hydra_entry()

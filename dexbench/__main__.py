@@ -1,7 +1,5 @@
-"""`python -m dexbench ...`: list, inspect, snapshot, docs, validate and merge."""
+"""`python -m dexbench ...`: list, inspect, snapshot, docs, validate, merge and split."""
 
-from dexbench.cli.errors import run_cli
-from dexbench.cli.introspect import main
-from dexbench.cli.merge import merge
+from dexbench.cli.introspect import entry
 
-run_cli(lambda argv: merge(argv[1:]) if argv[:1] == ["merge"] else main(argv))
+entry()

@@ -15,8 +15,8 @@ import pytest
 from dexbench.cli import collect as collect_cli
 from dexbench.cli import eval as eval_cli
 from dexbench.cli import train as train_cli
-from dexbench.cli.config import ConfigError
-from dexbench.cli.eval import EvalError, eval_config, evaluate, plan_tasks, prepare
+from dexbench.cli.config import ConfigError, load_config
+from dexbench.cli.eval import EvalError, check, evaluate, prepare
 from dexbench.cli.merge import merge
 from dexbench.eval.merge import MergeError, markdown, merge_runs, write_merged
 from dexbench.eval.merge import latex as merged_latex
@@ -25,6 +25,7 @@ from dexbench.eval.plot import category_chart
 from dexbench.eval.records import EpisodeLog, EpisodeRecord
 from dexbench.eval.seeds import EVAL_ENV, eval_keys
 from dexbench.eval.tables import write_tables
+from dexbench.tasks.registry import TASKS as TASK_REGISTRY
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 TASKS = ("PickCube", "PushButton")
@@ -94,14 +95,16 @@ def test_tables_chart_and_merge_on_synthetic_results(tmp_path):
     assert r"\multirow{2}{*}{primitive}" in tex and r"\textbf{0.50}" in tex
     paths = write_merged(table, tmp_path / "merged")
     assert sorted(paths) == ["csv", "md", "tex"] and all(p.exists() for p in paths.values())
+    assert merge_runs([tmp_path]).policies == table.policies  # a folder of runs: all of them
+    (tmp_path / "empty").mkdir()
     with pytest.raises(MergeError, match=r"no results\.json"):
-        merge_runs([tmp_path])
+        merge_runs([tmp_path / "empty"])
     assert merge([str(tmp_path / "a"), str(tmp_path / "b"), f"out={tmp_path / 'cli'}"]) == 0
     assert merge(["--help"]) == 0 and merge([]) == 2  # usage, nothing written
     rows = list(csv.reader((tmp_path / "cli/merged.csv").open()))
     assert rows[0] == ["category", "task", "dp", "dp3"] and rows[-1][:2] == ["all", "mean"]
     with pytest.raises(ConfigError, match="no results"):
-        merge([str(tmp_path)])
+        merge([str(tmp_path / "empty")])
 
 
 def test_episode_log_drops_a_line_torn_by_a_kill(tmp_path):
@@ -146,9 +149,13 @@ def _dp_args(checkpoints: pathlib.Path, name: str, num_envs: int) -> list[str]:
 
 
 def _run(argv: list[str], on_episode=None) -> tuple[dict, pathlib.Path]:
-    cfg, resume = eval_config(argv)
-    plans, skipped, run_dir = prepare(cfg, resume)
-    return evaluate(cfg, plans, skipped, run_dir, on_episode), run_dir
+    run, run_dir = prepare(argv)
+    return evaluate(run.spec, run.plans, run.skipped, run_dir, on_episode), run_dir
+
+
+def _plans(argv: list[str]):
+    run = check(load_config("eval", argv), argv)
+    return run.plans, run.skipped
 
 
 def test_dp_eval_killed_and_resumed_gives_the_same_table(checkpoints, tmp_path):
@@ -213,26 +220,27 @@ def test_expert_eval_interrupted_resumes_to_identical_episodes(tmp_path):
 
 
 def test_split_with_missing_tasks_fails_unless_skipped():
-    cfg, _ = eval_config(["+split=baseline19", "policy=expert"])
+    """`all` lists the paper's 100 tasks, some not implemented yet."""
+    split = load_config("eval", ["+split=all"]).split
+    tasks = [str(t) for ts in split.categories.values() for t in ts]
+    missing = [t for t in tasks if t not in TASK_REGISTRY]
+    assert missing, "every task exists: pick a split with a missing task for this test"
     with pytest.raises(EvalError) as err:
-        plan_tasks(cfg)
+        _plans(["+split=all", "policy=expert"])
     message = str(err.value)
-    assert "14 of the 19 tasks of baseline19" in message and "GraspBleach" in message
-    assert "+skip_missing=true" in message and "OpenFaucet" not in message
-    cfg, _ = eval_config(["+split=baseline19", "policy=expert", "+skip_missing=true"])
-    plans, skipped = plan_tasks(cfg)
-    assert [p.task for p in plans] == ["BimanualLiftTray", "OpenFaucet", "OpenLaptop",
-                                       "FunctionalPourMug", "PushT"]
-    assert plans[0].category == "Pick-and-Lift" and len(skipped) == 14
+    assert f"{len(missing)} of the {len(tasks)} tasks of all" in message
+    assert missing[0] in message and "+skip_missing=true" in message
+    assert "PickCube" not in message
+    plans, skipped = _plans(["+split=all", "policy=expert", "+skip_missing=true"])
+    assert [p.task for p in plans] == [t for t in tasks if t in TASK_REGISTRY]
+    assert sorted(skipped) == sorted(missing)
 
 
 def test_wrong_arity_and_checkpoint_errors_are_clear(tmp_path):
-    cfg, _ = eval_config(["task=BimanualLiftTray", "embodiment=floating_shadow"])
     with pytest.raises(EvalError, match="needs two hands; embodiment floating_shadow has one"):
-        plan_tasks(cfg)
-    cfg, _ = eval_config(["task=PickCube", f"checkpoint={tmp_path}"])
+        _plans(["task=BimanualLiftTray", "embodiment=floating_shadow"])
     with pytest.raises(EvalError, match="takes no checkpoint"):
-        plan_tasks(cfg)
+        _plans(["task=PickCube", f"checkpoint={tmp_path}"])
 
 
 def test_bench_eval_reports_batched_and_sequential_throughput(tmp_path):

@@ -1,1 +1,1 @@
-"""Command-line entry points (thin Hydra-composed mains)."""
+"""Command-line entry points: thin Hydra mains (`app.py`) that turn a config into a call."""

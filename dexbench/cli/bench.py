@@ -7,30 +7,46 @@ model with `mujoco.batch` alone, from the same states and with the same controls
 
 `python bench.py render ...`: RGB-D images/s of the CPU renderer and, with a GPU, of
 mujoco_warp's ray tracer (`renderers=` picks).
+
+`python bench.py eval ...`: evaluation episodes/min (`dexbench/cli/eval.py`). Each verb is
+a Hydra main over `conf/bench_<verb>.yaml`; results go to `runs/bench/<timestamp>-<verb>-...`.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import pathlib
 import platform
+import sys
 import time
 
 import mujoco
 import mujoco.batch
 import torch
+from omegaconf import DictConfig
 from tqdm import tqdm
 
+from dexbench.cli.app import Command, dispatch, register, stamp
 from dexbench.cli.bench_warp import bench_sim_warp
-from dexbench.cli.config import env_kwargs, load_config, new_run_dir, write_atomic
-from dexbench.cli.eval import bench_eval
+from dexbench.cli.config import (
+    default_embodiment,
+    env_kwargs,
+    load_config,
+    open_run_dir,
+    write_atomic,
+)
+from dexbench.cli.eval import BENCH_EVAL
 from dexbench.envs.dex_env import DexEnv
+from dexbench.envs.scene import check_pair
 from dexbench.sim.warp_render import WarpRenderer, default_warp_device
-from dexbench.tasks.registry import make_env
+from dexbench.tasks.registry import make_env, task_class
 
 USAGE = """usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=...] ...
        python bench.py render [num_envs=16] [width=128] [height=128] [renderers=[cpu,warp]] ...
-       python bench.py eval [policy=dp] [checkpoint=...] [num_envs=50] [horizon=32] ..."""
+       python bench.py eval [policy=dp] [checkpoint=...] [num_envs=50] [horizon=32]
+                            [backends=[cpu,warp]] [warp_episodes=1000] ...
+       python bench.py <verb> --help"""
 
 
 def _actions(env: DexEnv, count: int, noise: float, seed: int) -> list[torch.Tensor]:
@@ -44,12 +60,31 @@ def _actions(env: DexEnv, count: int, noise: float, seed: int) -> list[torch.Ten
     return out
 
 
+def check(cfg: DictConfig, overrides: list[str]) -> None:
+    """The env settings and the task x embodiment pair."""
+    env_kwargs(cfg)
+    check_pair(task_class(cfg.task), default_embodiment(cfg))
+
+
+def _dir(verb: str) -> object:
+    def run_dir(cfg: DictConfig) -> tuple[str, str]:
+        return "bench", f"{{stamp}}-{verb}-{cfg.task}-{default_embodiment(cfg)}"
+
+    return run_dir
+
+
 def bench_sim(overrides: list[str]) -> dict:
-    cfg = load_config("bench", overrides)
+    """Programmatic `python bench.py sim ...`."""
+    cfg = load_config("bench_sim", overrides)
+    check(cfg, overrides)
+    return bench_sim_in(cfg, SIM.folder(cfg, stamp()))
+
+
+def bench_sim_in(cfg: DictConfig, out: pathlib.Path) -> dict:
     if cfg.sim.backend == "warp":
-        return bench_sim_warp(cfg)
+        return bench_sim_warp(cfg, out)
     env = make_env(**env_kwargs(cfg))
-    run_dir = new_run_dir("bench", f"sim-{env.task.name}-{env.embodiment.name}", cfg)
+    run_dir = open_run_dir(out, cfg)
     n, steps, warmup = env.num_envs, int(cfg.steps), int(cfg.warmup)
     actions = _actions(env, 16, float(cfg.action_noise), int(cfg.seed))
     env.reset()
@@ -124,11 +159,17 @@ def _renderer_label(renderer) -> str:
 
 
 def bench_render(overrides: list[str]) -> dict:
+    """Programmatic `python bench.py render ...`."""
+    cfg = load_config("bench_render", overrides)
+    check(cfg, overrides)
+    return bench_render_in(cfg, RENDER.folder(cfg, stamp()))
+
+
+def bench_render_in(cfg: DictConfig, out: pathlib.Path) -> dict:
     """RGB-D images per second of one camera (an RGB + depth pair counts once), per
     renderer, with the images delivered where the env's tensors live (CPU for the CPU
     backend) and, for warp on a GPU, also kept on the GPU; the returned object is the
     first renderer's first result, with every result listed."""
-    cfg = load_config("bench", ["num_envs=16", "steps=20", *overrides])
     width, height = int(cfg.width), int(cfg.height)
     results = []
     for kind in _renderers(cfg):
@@ -154,7 +195,7 @@ def bench_render(overrides: list[str]) -> dict:
             print(f"{results[-1]['images_per_s']:,.0f} RGB-D images/s "
                   f"({results[-1]['renderer']}, images {results[-1]['images']}, "
                   f"{env.num_envs} envs, {width}x{height})")
-    run_dir = new_run_dir("bench", f"render-{env.task.name}-{env.embodiment.name}", cfg)
+    run_dir = open_run_dir(out, cfg)
     result = {"benchmark": "render", **results[0], "task": env.task.name,
               "embodiment": env.embodiment.name, "results": results,
               "mujoco": mujoco.__version__, "gpu": _gpu_name(), "run_dir": str(run_dir)}
@@ -189,16 +230,31 @@ def format_table(result: dict) -> str:
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
 
-def main(argv: list[str]) -> int:
-    if argv[:1] == ["sim"]:
-        result = bench_sim(argv[1:])
-        print(format_table(result))
-    elif argv[:1] == ["render"]:
-        result = bench_render(argv[1:])
-    elif argv[:1] == ["eval"]:
-        result = bench_eval(argv[1:])
-    else:
-        print(USAGE)
-        return 2
+def _print_sim(cfg: DictConfig, _prepared: None, out: pathlib.Path) -> int:
+    result = bench_sim_in(cfg, out)
+    print(format_table(result))
     print(json.dumps(result))
     return 0
+
+
+def _print_render(cfg: DictConfig, _prepared: None, out: pathlib.Path) -> int:
+    print(json.dumps(bench_render_in(cfg, out)))
+    return 0
+
+
+SIM = register(Command("bench_sim", _print_sim, check, _dir("sim")))
+RENDER = register(Command("bench_render", _print_render, check, _dir("render")))
+VERBS = {"sim": SIM, "render": RENDER, "eval": BENCH_EVAL}
+
+
+def main(argv: list[str]) -> int:
+    """Programmatic `python bench.py <verb> ...`; 2 with the usage for an unknown verb."""
+    if not argv or argv[0] not in VERBS:
+        print(USAGE, file=sys.stderr)
+        return 2
+    return VERBS[argv[0]].main(argv[1:])
+
+
+def entry() -> None:
+    """`python bench.py <verb> ...`: the verb's Hydra main."""
+    dispatch(VERBS, sys.argv[1:], USAGE)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import pathlib
 import time
 
 import mujoco
@@ -23,7 +24,7 @@ import torch
 from omegaconf import DictConfig
 from tqdm import tqdm
 
-from dexbench.cli.config import env_kwargs, new_run_dir, write_atomic
+from dexbench.cli.config import env_kwargs, open_run_dir, write_atomic
 from dexbench.envs.dex_env import DexEnv
 from dexbench.tasks.registry import make_env
 
@@ -86,14 +87,14 @@ def _versions() -> dict:
             "warp": warp.__version__, "torch": torch.__version__}
 
 
-def bench_sim_warp(cfg: DictConfig) -> dict:
+def bench_sim_warp(cfg: DictConfig, out: pathlib.Path) -> dict:
     """The warp backend's env vs raw throughput (and with a camera); see the module doc.
-    Writes `metrics.json` into a new `runs/bench/` folder."""
+    Writes `metrics.json` into the run folder `out`."""
     n, steps, warmup = int(cfg.num_envs), int(cfg.steps), int(cfg.warmup)
     kwargs = env_kwargs(cfg)
     kwargs.update(obs=STATE_GROUPS)
     env = make_env(**kwargs)
-    run_dir = new_run_dir("bench", f"sim-warp-{env.task.name}-{env.embodiment.name}", cfg)
+    run_dir = open_run_dir(out, cfg)
     actions = _actions(env, 16, float(cfg.action_noise), int(cfg.seed))
     env_time = _time_env(env, actions, steps, warmup, "env")
     raw_time = _time_raw(env, actions, steps, warmup)

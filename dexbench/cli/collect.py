@@ -5,7 +5,8 @@ writes a LeRobotDataset to `runs/datasets/<task>/<embodiment>/<name>/` (how, in
 `dexbench.data.collect`); the same command again resumes an interrupted run.
 `protocol=paper` collects the paper's set in one go: per task, `num_demos` with its
 default embodiment and `other_hands_demos` with each other hand on the same mount, and
-writes one summary under `runs/collect/`.
+writes one summary in its run folder `runs/collect/<timestamp>-paper/`; a single
+collection's run folder `runs/collect/<timestamp>-<task>/` holds its config and log.
 """
 
 from __future__ import annotations
@@ -18,11 +19,13 @@ from collections.abc import Callable
 from omegaconf import DictConfig, OmegaConf
 
 from dexbench import experts
-from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, runs_root
+from dexbench.cli.app import Command, hydra_main, register
+from dexbench.cli.config import ConfigError, env_kwargs, open_run_dir, runs_root
 from dexbench.data.collect import CollectSettings, Staging, collect
 from dexbench.data.files import write_json
 from dexbench.embodiments.builder import other_hands as same_mount_hands
 from dexbench.envs.dex_env import DexEnv
+from dexbench.envs.scene import check_pair
 from dexbench.experts.base import Expert
 from dexbench.tasks.registry import TASKS, make_env, task_class
 
@@ -87,16 +90,33 @@ def paper_plan(tasks: list[str], num_demos: int, other_hands: int) -> list[tuple
     return [entry for entry in plan if entry[2] > 0]
 
 
-def run_protocol(cfg: DictConfig, make_expert: ExpertFactory) -> dict:
-    """`protocol=paper`: every dataset of the plan; one summary JSON. A task or hand
-    without an expert is listed as skipped, and the protocol goes on."""
-    if cfg.out:
-        raise ConfigError("out= names one dataset; protocol=paper writes one per task and "
-                          "embodiment under runs/datasets (name= picks their folder name)")
-    tasks = list(cfg.tasks) if cfg.tasks else list(TASKS)
+def check(cfg: DictConfig, overrides: list[str]) -> None:
+    """The settings and the task x embodiment pair (or the protocol's tasks)."""
     _checked(cfg)
+    if cfg.protocol == "paper":
+        if cfg.out:
+            raise ConfigError("out= names one dataset; protocol=paper writes one per task and "
+                              "embodiment under runs/datasets (name= picks their folder name)")
+        for task in cfg.tasks or []:
+            task_class(str(task))
+    elif cfg.protocol is None:
+        embodiment = cfg.embodiment or task_class(cfg.task).default_embodiment
+        check_pair(task_class(cfg.task), embodiment)
+    else:
+        raise ConfigError(f"unknown protocol {cfg.protocol!r}; protocols: paper")
+
+
+def run_dir(cfg: DictConfig) -> tuple[str, str]:
+    label = "paper" if cfg.protocol == "paper" else str(cfg.task)
+    return "collect", f"{{stamp}}-{label}"
+
+
+def run_protocol(cfg: DictConfig, make_expert: ExpertFactory, run_dir: pathlib.Path) -> dict:
+    """`protocol=paper`: every dataset of the plan; one summary JSON in `run_dir`. A task
+    or hand without an expert is listed as skipped, and the protocol goes on."""
+    tasks = list(cfg.tasks) if cfg.tasks else list(TASKS)
     plan = paper_plan(tasks, int(cfg.num_demos), int(cfg.other_hands_demos))
-    run_dir = new_run_dir("collect", "paper", cfg)
+    run_dir = open_run_dir(run_dir, cfg)
     results, skipped = [], []
     for task, embodiment, demos in plan:
         sub = OmegaConf.merge(cfg, {"task": task, "embodiment": embodiment,
@@ -124,20 +144,32 @@ def _line(stats: dict) -> str:
             f"{stats['success_rate']:.2f}{per_step}) -> {where}")
 
 
-def main(argv: list[str], make_expert: ExpertFactory | None = None) -> int:
-    cfg = load_config("collect", argv)
+def run(cfg: DictConfig, _prepared: None, out: pathlib.Path,
+        make_expert: ExpertFactory | None = None) -> int:
     factory = make_expert or experts.make_expert
     try:
         if cfg.protocol == "paper":
-            result = run_protocol(cfg, factory)
+            result = run_protocol(cfg, factory, out)
             for stats in result["datasets"]:
                 print(_line(stats))
-        elif cfg.protocol is None:
+        else:
+            open_run_dir(out, cfg)
             result = collect_one(cfg, factory)
             print(_line(result))
-        else:
-            raise ConfigError(f"unknown protocol {cfg.protocol!r}; protocols: paper")
     except KeyboardInterrupt:
         return 130
     print(json.dumps(result))
     return 0 if result["complete"] else 1
+
+
+COMMAND = register(Command("collect", run, check, run_dir))
+hydra_entry = hydra_main(COMMAND)
+
+
+def main(argv: list[str], make_expert: ExpertFactory | None = None) -> int:
+    """Programmatic `python collect.py ...`; `make_expert` replaces the experts."""
+    if make_expert is None:
+        return COMMAND.main(argv)
+    with_expert = Command("collect", lambda cfg, p, out: run(cfg, p, out, make_expert),
+                          check, run_dir)
+    return with_expert.main(argv)

@@ -1,28 +1,36 @@
-"""Compose the Hydra config tree under `conf/` from `key=value` overrides.
+"""The config tree under `conf/` and the checks every command shares.
 
-The entry points use Hydra's compose API rather than `@hydra.main` so they can take a
-sub-command (`bench.py sim ...`, `python -m dexbench inspect ...`) and keep outputs in
-our own `runs/` layout.
+The entry points are Hydra mains (`dexbench/cli/app.py`); `load_config` composes the
+same tree with Hydra's compose API for the programmatic forms (`<module>.main(argv)`).
+`conf/` sits at the repository root and is installed as `dexbench/conf`.
 """
 
 from __future__ import annotations
 
-import datetime as dt
 import os
 import pathlib
 import sys
 
 import yaml
 from hydra import compose, initialize_config_dir
+from hydra.core.global_hydra import GlobalHydra
 from hydra.errors import HydraException
 from omegaconf import DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
-from dexbench.envs.arena import PhysicsOptions
+from dexbench.cli.schema import physics_options
 from dexbench.envs.observations import resolve_preset
 from dexbench.envs.variation import PhysicalVariation, VisualVariation
 
-CONF_DIR = pathlib.Path(__file__).resolve().parents[2] / "conf"
+
+def _conf_dir() -> pathlib.Path:
+    """The repository's `conf/` in a checkout, else the installed copy `dexbench/conf`."""
+    package = pathlib.Path(__file__).resolve().parents[1]
+    checkout = package.parent / "conf"
+    return checkout if (checkout / "config.yaml").exists() else package / "conf"
+
+
+CONF_DIR = _conf_dir()
 
 
 class ConfigError(ValueError):
@@ -34,6 +42,7 @@ def load_config(name: str, overrides: list[str]) -> DictConfig:
     bad = [o for o in overrides if "=" not in o]
     if bad:
         raise ConfigError(f"arguments must be key=value overrides, got {bad}")
+    GlobalHydra.instance().clear()  # a Hydra main run earlier in this process
     try:
         with initialize_config_dir(str(CONF_DIR), version_base="1.3"):
             cfg = compose(config_name=name, overrides=overrides)
@@ -64,8 +73,11 @@ def obs_of(cfg: DictConfig) -> str | list[str]:
 
 def env_kwargs(cfg: DictConfig) -> dict:
     """Keyword arguments of `make_env` from the common environment keys, checked."""
-    physics = PhysicsOptions(timestep=float(cfg.sim.timestep),
-                             control_hz=float(cfg.sim.control_hz))
+    try:
+        physics = physics_options(cfg.sim)
+        physics.decimation  # noqa: B018  (checks timestep against control_hz)
+    except ValueError as err:
+        raise ConfigError(f"sim: {err}") from None
     obs = obs_of(cfg)
     cam = cfg.camera
     return dict(task=cfg.task, embodiment=cfg.embodiment, num_envs=positive_int(cfg, "num_envs"),
@@ -73,11 +85,19 @@ def env_kwargs(cfg: DictConfig) -> dict:
                 nthread=int(cfg.sim.nthread), physics=physics,
                 cameras=list(cam.names) if cam.names else None,
                 image_size=(int(cam.width), int(cam.height)), num_points=int(cam.num_points),
-                renderer=cam.renderer, shadows=bool(cam.shadows),
+                renderer=renderer_of(cfg), shadows=bool(cam.shadows),
                 visual=VisualVariation(**OmegaConf.to_container(cfg.visual)),
                 physical=PhysicalVariation(**{
                     k: tuple(v) if isinstance(v, list) else v
                     for k, v in OmegaConf.to_container(cfg.physical).items()}))
+
+
+def renderer_of(cfg: DictConfig) -> str:
+    """`camera.renderer`, with `auto` (and a config from before it) following the backend."""
+    renderer = str(cfg.camera.get("renderer", "auto"))
+    if renderer == "auto":
+        return "warp" if cfg.sim.backend == "warp" else "cpu"
+    return renderer
 
 
 def runs_root() -> pathlib.Path:
@@ -85,14 +105,23 @@ def runs_root() -> pathlib.Path:
     return pathlib.Path(os.environ.get("DEXBENCH_RUNS_DIR", "runs"))
 
 
-def new_run_dir(kind: str, label: str, cfg: DictConfig) -> pathlib.Path:
-    """Create `runs/<kind>/<timestamp>-<label>/` holding the resolved config."""
-    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
-    path = runs_root() / kind / f"{stamp}-{label}"
-    path.mkdir(parents=True, exist_ok=False)
-    write_atomic(path / "config.yaml", yaml.safe_dump(OmegaConf.to_container(cfg)))
+def open_run_dir(path: pathlib.Path, cfg: DictConfig) -> pathlib.Path:
+    """The run folder Hydra made (or, called without Hydra, make it) with the resolved
+    config and the command line."""
+    path.mkdir(parents=True, exist_ok=True)
+    write_atomic(path / "config.yaml", yaml.safe_dump(OmegaConf.to_container(cfg, resolve=True)))
     (path / "command.txt").write_text(" ".join(sys.argv) + "\n")
     return path
+
+
+def default_embodiment(cfg: DictConfig) -> str:
+    """`embodiment`, or the task's default; a label only (a bad name fails later)."""
+    if cfg.get("embodiment"):
+        return str(cfg.embodiment)
+    from dexbench.tasks.registry import TASKS
+
+    task = TASKS.get(str(cfg.task))
+    return task.default_embodiment if task is not None else "default"
 
 
 def write_atomic(path: pathlib.Path, text: str) -> None:

@@ -11,12 +11,13 @@ from dexbench.data.meta import DatasetError
 from dexbench.embodiments.builder import UnknownEmbodimentError
 from dexbench.envs.dex_env import InvalidActionError
 from dexbench.envs.scene import InfeasibleTaskError
+from dexbench.eval.session import EvalError
 from dexbench.policies.vla_adapters.chunks import RemotePolicyError
 from dexbench.tasks.registry import UnknownTaskError
 
 USER_ERRORS = (ConfigError, UnknownTaskError, UnknownEmbodimentError, InfeasibleTaskError,
                MissingRobotModelError, ChecksumMismatchError, InvalidActionError,
-               DatasetError, RemotePolicyError, NotImplementedError)
+               DatasetError, RemotePolicyError, EvalError, NotImplementedError)
 
 
 def run_cli(main: Callable[[list[str]], int]) -> None:

@@ -1,160 +1,123 @@
 """`python eval.py +split=<name> policy=<kind> checkpoint=<path>`: closed-loop evaluation.
 
 Runs `episodes` evaluation episodes per task (keys in `dexbench/eval/seeds.py`, never a
-demonstration's) on `num_envs` batched envs with batched policy inference, and writes to
+demonstration's) on batched envs with batched policy inference, and writes to
 `runs/eval/<split-or-task>/<policy>/<name-or-timestamp>/`: `episodes.jsonl` (one line
 per finished episode, as it ends), `results.{md,csv,tex,json}` (per-task success with
 95% Wilson intervals, category and overall means), `success_by_category.png`, videos of
-`video.episodes` under `videos/<task>/`, `config.yaml`, `run.json` and `eval.log` (per
-task, and the error that stopped the run). `resume=<run folder>` (or the same `name=`)
-continues an interrupted run: finished episodes are kept and not run again.
-`python eval.py task=<Task> policy=expert` evaluates one task. The policy fixes the
-observation preset (a checkpoint's own; `state` for the expert): `obs=` may only repeat it.
+`video.episodes` under `videos/<task>/`, `config.yaml`, `run.json`, `eval.log` (per
+task, and the error that stopped the run) and Hydra's `.hydra/`. `resume=<run folder>`
+(or the same `name=`) continues an interrupted run: finished episodes are kept and not
+run again. `python eval.py task=<Task> policy=expert` evaluates one task;
+`sim.backend=warp` runs each task's episodes as warp worlds (GPU). The policy fixes the
+observation preset (a checkpoint's own; `state` for the expert): `obs=` may only repeat
+it. With `-m`, each job is one run; `+split=<name> split_task=A,B,...` sweeps a split's
+tasks as separate jobs (`python -m dexbench split <name>` prints them) and
+`python -m dexbench merge <sweep folder>` joins their results. The logic lives in
+`dexbench/eval/session.py`; this module turns a config into an `EvalSpec`.
 """
 
 from __future__ import annotations
 
-import datetime as dt
 import json
 import pathlib
-import sys
-import time
-from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import torch
 import yaml
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
 from tqdm import tqdm
 
+from dexbench.cli.app import Command, hydra_main, register, stamp
 from dexbench.cli.config import (
-    ConfigError,
     env_kwargs,
     load_config,
-    new_run_dir,
     obs_of,
+    open_run_dir,
     runs_root,
     write_atomic,
 )
-from dexbench.cli.errors import USER_ERRORS
-from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.scene import check_pair
 from dexbench.eval.merge import RESULTS_FILE
-from dexbench.eval.metrics import summarize
 from dexbench.eval.plan import TaskPlan, plan_task
-from dexbench.eval.plot import category_chart
-from dexbench.eval.records import EpisodeLog, EpisodeRecord
-from dexbench.eval.runner import run_episodes
-from dexbench.eval.tables import write_tables
+from dexbench.eval.session import (
+    EvalError,
+    EvalSpec,
+    Video,
+    build_env,
+    build_policy,
+    check_run_dir,
+    check_spec,
+    evaluate,
+    open_run,
+    plan_tasks,
+)
+from dexbench.eval.session import run as run_eval
 from dexbench.eval.throughput import episodes_per_minute, model_module, untrained_checkpoint
-from dexbench.eval.video import EpisodeCamera, EpisodeVideos
-from dexbench.policies.common.protocol import Policy, PolicySpec, check_action_layout
-from dexbench.policies.registry import KINDS, SERVED, WITHOUT_CHECKPOINT, policy_module
-from dexbench.policies.vla_adapters.served import TRANSPORT
-from dexbench.tasks.registry import TASKS, make_env, task_class
+from dexbench.policies.common.protocol import PolicySpec
+from dexbench.policies.registry import KINDS, WITHOUT_CHECKPOINT
+from dexbench.tasks.registry import TASKS, task_class
 
 RUNTIME_KEYS = ("num_envs", "device", "progress", "sim.nthread", "skip_missing")
 TRAINERS = {"rl": "python rl.py task=<Task>"}  # what writes a kind's checkpoints, if not train.py
-CHART_FILE = "success_by_category.png"
+
+__all__ = ["EvalError", "bench_eval", "eval_config", "evaluate", "main", "plan_tasks",
+           "prepare", "spec_of"]
 
 
-class EvalError(ConfigError):
-    """An evaluation that cannot start or go on as asked."""
+@dataclass(frozen=True)
+class Prepared:
+    """A checked evaluation: its config (a resumed run's own), spec and plans."""
+
+    cfg: DictConfig
+    spec: EvalSpec
+    plans: list[TaskPlan]
+    skipped: dict[str, str]
 
 
-def eval_config(argv: list[str]) -> tuple[DictConfig, pathlib.Path | None]:
-    """The resolved config, and the run folder when `resume=` names one."""
-    resume = [a.split("=", 1)[1] for a in argv if a.split("=", 1)[0] == "resume"]
-    if not resume:
-        cfg = load_config("eval", argv)
-        if not any(a.lstrip("+").split("=", 1)[0] == "obs" for a in argv):
-            cfg.obs = None  # the policy's own preset; an explicit obs= must agree with it
-        return cfg, None
-    run_dir = pathlib.Path(resume[0])
+def eval_config(cfg: DictConfig, overrides: list[str]) -> DictConfig:
+    """The config to run: `cfg`, or with `resume=` the run's stored config with the
+    runtime settings among `overrides` applied."""
+    if not cfg.get("resume"):
+        return cfg
+    run_dir = pathlib.Path(cfg.resume)
     if not (run_dir / "config.yaml").exists():
         raise EvalError(f"resume={run_dir} is not an evaluation run folder (no config.yaml)")
-    cfg = OmegaConf.create(yaml.safe_load((run_dir / "config.yaml").read_text()))
-    cfg.obs = None  # the policy's, as when the run was created
-    for arg in argv:
+    stored = OmegaConf.create(yaml.safe_load((run_dir / "config.yaml").read_text()))
+    stored.obs = None  # the policy's, as when the run was created
+    stored.resume = str(run_dir)
+    for arg in overrides:
         key, _, value = arg.lstrip("+").partition("=")
         if key == "resume":
             continue
         if key not in RUNTIME_KEYS:
             raise EvalError(f"resume= continues a run with the config stored in it; only "
                             f"{', '.join(RUNTIME_KEYS)} may change (got {key}=)")
-        OmegaConf.update(cfg, key, yaml.safe_load(value), force_add=True)
-    return cfg, run_dir
+        OmegaConf.update(stored, key, yaml.safe_load(value), force_add=True)
+    return stored
 
 
 def task_groups(cfg: DictConfig) -> tuple[str, dict[str, list[str]]]:
-    """(label, category -> tasks): the split's, else those of `tasks` or `task`."""
+    """(label, category -> tasks): the split's (or its `split_task` alone), else those
+    of `tasks` or `task`."""
     split = cfg.get("split")
     if split is not None:
         if not isinstance(split, DictConfig) or "categories" not in split:
             raise EvalError("split must be chosen with +split=<name> (conf/split/)")
-        return str(split.name), {str(c): [str(t) for t in ts]
-                                 for c, ts in split.categories.items()}
+        groups = {str(c): [str(t) for t in ts] for c, ts in split.categories.items()}
+        only = cfg.get("split_task")
+        if only is not None:
+            groups = {c: [t for t in ts if t == only] for c, ts in groups.items()}
+            groups = {c: ts for c, ts in groups.items() if ts}
+            if not groups:
+                raise EvalError(f"split_task={only} is not a task of split {split.name}; "
+                                f"`python -m dexbench split {split.name}` lists them")
+        return str(split.name), groups
     tasks = [str(t) for t in cfg.tasks] if cfg.get("tasks") else [str(cfg.task)]
     groups: dict[str, list[str]] = {}
     for task in tasks:
         groups.setdefault(TASKS[task].category if task in TASKS else "unknown", []).append(task)
     return "+".join(tasks), groups
-
-
-def _identity(cfg: DictConfig, label: str, groups: dict[str, list[str]]) -> dict:
-    """What fixes a run's episodes and outcomes: a resumed run must agree on all of it."""
-    ckpt = cfg.checkpoint
-    kind = policy_kind(cfg)
-    served = ({"policy_settings": {k: v for k, v in policy_options(cfg).items()
-                                   if k not in TRANSPORT}} if kind in SERVED else {})
-    return {"label": label, "categories": groups, "policy": kind, **served,
-            "checkpoint": None if ckpt is None else str(pathlib.Path(ckpt).resolve()),
-            "embodiment": cfg.embodiment, "episodes": int(cfg.episodes),
-            "seed": int(cfg.seed), "horizon": cfg.horizon,
-            "sim": {k: v for k, v in OmegaConf.to_container(cfg.sim).items() if k != "nthread"},
-            **{k: OmegaConf.to_container(cfg[k]) for k in ("camera", "visual", "physical")}}
-
-
-def _check(cfg: DictConfig) -> None:
-    kind = policy_kind(cfg)
-    if cfg.checkpoint is None and kind in KINDS and kind not in WITHOUT_CHECKPOINT:
-        trainer = TRAINERS.get(kind, f"python train.py policy={kind} task=<Task>")
-        raise EvalError(f"policy={kind} needs checkpoint=<a .pt file, a training run folder "
-                        f"or a folder of them>; `{trainer}` writes one")
-    if cfg.get("obs") is not None:
-        obs_of(cfg)
-    episodes = int(cfg.episodes)
-    if episodes < 1 or (cfg.num_envs is not None and int(cfg.num_envs) < 1):
-        raise EvalError(f"episodes and num_envs must be >= 1, got {episodes} and "
-                        f"{cfg.num_envs}")
-    if cfg.horizon is not None and int(cfg.horizon) < 1:
-        raise EvalError(f"horizon must be >= 1 control steps or null, got {cfg.horizon}")
-    bad = [e for e in cfg.video.episodes if not 0 <= int(e) < episodes]
-    if bad:
-        raise EvalError(f"video.episodes {bad} lie outside the {episodes} episodes [0, "
-                        f"{episodes})")
-
-
-def open_run(cfg: DictConfig, run_dir: pathlib.Path | None) -> pathlib.Path:
-    """Create the run folder, or reopen one whose identity matches this config."""
-    label, groups = task_groups(cfg)
-    identity = _identity(cfg, label, groups)
-    if run_dir is None:
-        name = cfg.name or dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
-        run_dir = runs_root() / "eval" / label / policy_kind(cfg) / str(name)
-    run_file = run_dir / "run.json"
-    if run_file.exists():
-        stored = json.loads(run_file.read_text())["identity"]
-        changed = sorted(k for k in {*stored, *identity} if stored.get(k) != identity.get(k))
-        if changed:
-            raise EvalError(f"{run_dir} holds a run with other settings ({', '.join(changed)}"
-                            "); choose another name= or resume= it unchanged")
-    else:
-        run_dir.mkdir(parents=True, exist_ok=True)
-        write_atomic(run_dir / "config.yaml", yaml.safe_dump(OmegaConf.to_container(cfg)))
-        write_atomic(run_file, json.dumps({"identity": identity}, indent=2) + "\n")
-    with open(run_dir / "command.txt", "a") as f:
-        f.write(" ".join(sys.argv) + "\n")
-    return run_dir
 
 
 def policy_kind(cfg: DictConfig) -> str:
@@ -171,250 +134,203 @@ def policy_options(cfg: DictConfig) -> dict:
     return options
 
 
-def _device(name: str) -> str:
-    if name == "auto":
-        return "cuda" if torch.cuda.is_available() else "cpu"
-    return name
-
-
-def plan_tasks(cfg: DictConfig) -> tuple[list[TaskPlan], dict[str, str]]:
-    """Every task's plan, or an error naming the tasks that cannot run (unless
-    `+skip_missing=true`, which returns them as skipped with their reasons)."""
-    label, groups = task_groups(cfg)
+def spec_of(cfg: DictConfig, untrained: bool = False) -> EvalSpec:
+    """The run `cfg` asks for, with its values checked (`untrained`: a kind that needs a
+    checkpoint may go without, as `bench.py eval` times one)."""
     kind = policy_kind(cfg)
-    options = policy_options(cfg)
-    plans, problems = [], {}
-    for category, tasks in groups.items():
-        for task in tasks:
-            plan = plan_task(task, category, kind, cfg.checkpoint, cfg.embodiment, options)
-            if isinstance(plan, TaskPlan):
-                plans.append(plan)
-            else:
-                problems[task] = plan
-    total, rest = sum(map(len, groups.values())), len(plans)
-    if problems and (not rest or not cfg.get("skip_missing", False)):
-        by_reason: dict[str, list[str]] = {}
-        for task, why in problems.items():
-            by_reason.setdefault(why, []).append(task)
-        listed = "; ".join(f"{', '.join(ts)}: {why}" for why, ts in by_reason.items())
-        if total == 1:
-            raise EvalError(listed)
-        hint = f"; add +skip_missing=true to evaluate the other {rest}" if rest else ""
-        raise EvalError(f"{len(problems)} of the {total} tasks of {label} cannot be "
-                        f"evaluated ({listed}){hint}")
-    _check_obs(cfg, plans)
-    return plans, problems
+    if (cfg.checkpoint is None and kind in KINDS and kind not in WITHOUT_CHECKPOINT
+            and not untrained):
+        trainer = TRAINERS.get(kind, f"python train.py policy={kind} task=<Task>")
+        raise EvalError(f"policy={kind} needs checkpoint=<a .pt file, a training run folder "
+                        f"or a folder of them>; `{trainer}` writes one")
+    if cfg.get("obs") is not None:
+        obs_of(cfg)
+    label, groups = task_groups(cfg)
+    video = cfg.get("video") or {"episodes": [], "camera": "front", "width": 256,
+                                 "height": 256}
+    settings = {k: OmegaConf.to_container(cfg[k], resolve=True)
+                for k in ("sim", "camera", "visual", "physical")}
+    spec = EvalSpec(
+        label=label, groups=groups, kind=kind, options=policy_options(cfg),
+        checkpoint=None if cfg.checkpoint is None else str(cfg.checkpoint),
+        embodiment=cfg.embodiment, episodes=int(cfg.episodes), seed=int(cfg.seed),
+        horizon=None if cfg.horizon is None else int(cfg.horizon),
+        env=env_kwargs(OmegaConf.merge(cfg, {"obs": "state", "num_envs": 1})),
+        settings=settings, num_envs=None if cfg.num_envs is None else int(cfg.num_envs),
+        device=str(cfg.device), policy_label=cfg.get("label"),
+        video=Video(tuple(int(e) for e in video["episodes"]), str(video["camera"]),
+                    int(video["width"]), int(video["height"])),
+        skip_missing=bool(cfg.get("skip_missing", False)), progress=bool(cfg.progress))
+    check_spec(spec)
+    return spec
 
 
-def _check_obs(cfg: DictConfig, plans: list[TaskPlan]) -> None:
-    """The policy fixes what it observes: an explicit `obs=` may only repeat it."""
+def _obs(cfg: DictConfig) -> str | list[str] | None:
     if cfg.get("obs") is None:
-        return
-    obs = obs_of(cfg)
-    for plan in plans:
-        wanted = plan.spec.obs if isinstance(plan.spec.obs, str) else list(plan.spec.obs)
-        if wanted != obs:
-            raise EvalError(f"policy={policy_kind(cfg)} observes obs={wanted} on {plan.task}, "
-                            f"not obs={cfg.obs}: the policy fixes its observations; drop obs=")
+        return None
+    return list(cfg.obs) if isinstance(cfg.obs, ListConfig) else str(cfg.obs)
 
 
-def build_env(cfg: DictConfig, plan: TaskPlan, num_envs: int) -> DexEnv:
-    """A batched env for `plan` with the policy's observation preset."""
-    obs = plan.spec.obs if isinstance(plan.spec.obs, str) else list(plan.spec.obs)
-    kwargs = env_kwargs(OmegaConf.merge(cfg, {"num_envs": num_envs, "obs": obs}))
-    kwargs.update(task=plan.task, embodiment=plan.embodiment)
-    if plan.spec.cameras is not None:
-        kwargs.update(cameras=list(plan.spec.cameras))
-    env = make_env(**kwargs)
-    if cfg.horizon is not None:
-        env.episode_steps = int(cfg.horizon)
-    return env
-
-
-def build_policy(cfg: DictConfig, plan: TaskPlan, env: DexEnv) -> Policy:
-    policy = policy_module(policy_kind(cfg)).build(plan.checkpoint, env, _device(cfg.device),
-                                                   policy_options(cfg))
-    check_action_layout(policy.spec, env.embodiment.actuators)
-    return policy
-
-
-def _log(run_dir: pathlib.Path, line: str) -> None:
-    with open(run_dir / "eval.log", "a") as f:
-        f.write(f"{dt.datetime.now().isoformat(timespec='seconds')} {line}\n")
-
-
-def write_results(cfg: DictConfig, run_dir: pathlib.Path, plans: list[TaskPlan],
-                  skipped: dict[str, str], records: list[EpisodeRecord]) -> dict:
-    """results.{md,csv,tex,json} and the chart from the episodes finished so far."""
-    label, groups = task_groups(cfg)
-    planned = {p.task for p in plans}
-    counts = {p.task: 0 for p in plans if p.task not in skipped}
-    for r in records:
-        if r.task in planned:
-            counts[r.task] += 1
-    kind = policy_kind(cfg)
-    info = {"label": label, "policy": kind, "policy_label": cfg.label or kind,
-            "checkpoint": cfg.checkpoint, "episodes_per_task": int(cfg.episodes),
-            "seed": int(cfg.seed), "horizon": cfg.horizon, "run_dir": str(run_dir),
-            "complete": all(c >= int(cfg.episodes) for c in counts.values())}
-    summary = summarize(groups, [r for r in records if r.task in planned], skipped, info)
-    write_tables(summary, run_dir)
-    if summary["categories"]:
-        category_chart(summary, run_dir / CHART_FILE)
-    return summary
-
-
-def prepare(cfg: DictConfig, resume: pathlib.Path | None = None
-            ) -> tuple[list[TaskPlan], dict[str, str], pathlib.Path]:
-    """Check the config and every task, then create or reopen the run folder."""
-    _check(cfg)
-    plans, skipped = plan_tasks(cfg)
-    return plans, skipped, open_run(cfg, resume)
-
-
-def evaluate(cfg: DictConfig, plans: list[TaskPlan], skipped: dict[str, str],
-             run_dir: pathlib.Path,
-             on_episode: Callable[[EpisodeRecord], None] | None = None) -> dict:
-    """Evaluate every planned task, resuming from `run_dir`'s episodes; the summary.
-
-    `on_episode` sees each record once it is on disk.
-    """
-    log = EpisodeLog(run_dir / "episodes.jsonl")
-    records = log.load()
-    episodes = int(cfg.episodes)
-    done = {(r.task, r.episode) for r in records}
-    todo = {p.task: [i for i in range(episodes) if (p.task, i) not in done] for p in plans}
-    bar = tqdm(total=episodes * len(plans), initial=episodes * len(plans) - sum(
-        map(len, todo.values())), unit="episode", disable=not cfg.progress)
-
-    def record(rec: EpisodeRecord) -> None:
-        log.append(rec)
-        records.append(rec)
-        bar.update(1)
-        if on_episode is not None:
-            on_episode(rec)
-
+def run_dir(cfg: DictConfig) -> tuple[str, str]:
+    """`eval/<label>/<policy>` and the run's name (a resumed run: its own folder)."""
+    if cfg.get("resume"):
+        return str(pathlib.Path(cfg.resume).resolve()), ""
     try:
-        for plan in plans:
-            if todo[plan.task]:
-                _evaluate_task(cfg, run_dir, plan, todo[plan.task], skipped, record, bar)
-                write_results(cfg, run_dir, plans, skipped, records)
-    except KeyboardInterrupt:
-        write_results(cfg, run_dir, plans, skipped, records)
-        raise
-    finally:
-        bar.close()
-    return write_results(cfg, run_dir, plans, skipped, records)
+        label = task_groups(cfg)[0]
+    except (EvalError, KeyError):
+        label = "eval"
+    return f"eval/{label}/{policy_kind(cfg)}", str(cfg.name or "{stamp}")
 
 
-def _evaluate_task(cfg: DictConfig, run_dir: pathlib.Path, plan: TaskPlan, pending: list[int],
-                   skipped: dict[str, str], record: Callable[[EpisodeRecord], None],
-                   bar: tqdm) -> None:
-    width = int(cfg.num_envs) if cfg.num_envs is not None else min(50, int(cfg.episodes))
-    env = build_env(cfg, plan, min(width, len(pending)))
-    try:
-        policy = build_policy(cfg, plan, env)
-    except ValueError as err:
-        if not cfg.get("skip_missing", False):
-            others = sum(map(len, task_groups(cfg)[1].values())) > 1
-            hint = " (+skip_missing=true evaluates the other tasks)" if others else ""
-            raise EvalError(f"{plan.task}: {err}{hint}") from None
-        skipped[plan.task] = f"policy cannot run: {err}"
-        _log(run_dir, f"{plan.task}: skipped: {err}")
-        return
-    videos = None
-    if cfg.video.episodes:
-        try:
-            camera = EpisodeCamera(env, str(cfg.video.camera), int(cfg.video.width),
-                                   int(cfg.video.height))
-        except ValueError as err:
-            raise EvalError(f"video.camera={cfg.video.camera}: {err}") from None
-        videos = EpisodeVideos(camera, {int(e) for e in cfg.video.episodes},
-                               run_dir / "videos" / plan.task, 1.0 / env.control_dt)
-    bar.set_description(plan.task)
-    _log(run_dir, f"{plan.task}: {len(pending)} episodes on {env.num_envs} envs "
-                  f"({plan.embodiment}, obs {plan.spec.obs})")
-    started, successes = time.perf_counter(), 0
-
-    def counted(rec: EpisodeRecord) -> None:
-        nonlocal successes
-        successes += rec.success
-        record(rec)
-
-    try:
-        run_episodes(env, policy, pending, int(cfg.seed), counted, videos)
-    finally:
-        if videos is not None:
-            videos.close()
-    _log(run_dir, f"{plan.task}: {successes}/{len(pending)} successes in "
-                  f"{time.perf_counter() - started:.1f} s")
+def check(cfg: DictConfig, overrides: list[str]) -> Prepared:
+    """Everything that can be wrong, before the run folder exists; a named or resumed run
+    must match what it holds."""
+    cfg = eval_config(cfg, overrides)
+    spec = spec_of(cfg)
+    plans, skipped = plan_tasks(spec, _obs(cfg))
+    layout, leaf = run_dir(cfg)
+    if "{stamp}" not in leaf:
+        check_run_dir(spec, runs_root() / layout / leaf)
+    return Prepared(cfg, spec, plans, skipped)
 
 
-def main(argv: list[str]) -> int:
-    cfg, resume = eval_config(argv)
-    plans, skipped, run_dir = prepare(cfg, resume)
-    try:
-        summary = evaluate(cfg, plans, skipped, run_dir)
-    except KeyboardInterrupt:
-        _log(run_dir, "interrupted")
+def prepare(argv: list[str]) -> tuple[Prepared, pathlib.Path]:
+    """Programmatic: the checked run and its opened folder (tests, notebooks)."""
+    cfg = load_config("eval", argv)
+    prepared = check(cfg, argv)
+    folder = COMMAND.folder(prepared.cfg, stamp())
+    return prepared, open_run(prepared.spec, folder, _config(prepared.cfg))
+
+
+def _config(cfg: DictConfig) -> dict:
+    return OmegaConf.to_container(cfg, resolve=True)
+
+
+def run(cfg: DictConfig, prepared: Prepared, out: pathlib.Path) -> int:
+    spec = prepared.spec
+    run_dir = open_run(spec, out, _config(prepared.cfg))
+    code, summary = run_eval(spec, prepared.plans, prepared.skipped, run_dir)
+    if summary is None:
         print(f"\ninterrupted: finished episodes are kept in {run_dir}/episodes.jsonl; "
-              f"continue with `python eval.py resume={run_dir}`", file=sys.stderr)
-        return 130
-    except USER_ERRORS as err:
-        _log(run_dir, f"error: {err}")
-        raise
-    except Exception as err:
-        _log(run_dir, f"stopped by {type(err).__name__}: {err}")
-        raise
+              f"continue with `python eval.py resume={run_dir}`")
+        return code
     print((run_dir / "results.md").read_text())
     print(json.dumps({"overall": summary["overall"], "episodes": summary["episodes"],
                       "complete": summary["complete"], "run_dir": str(run_dir),
                       "results": str(run_dir / RESULTS_FILE)}))
-    return 0 if summary["complete"] else 1
+    return code
 
 
-def bench_eval(argv: list[str]) -> dict:
-    """`python bench.py eval`: episodes/min of `num_envs` batched envs against one env at
-    a time, same policy and horizon; a JSON-ready result."""
-    cfg = load_config("bench_eval", argv)
+COMMAND = register(Command("eval", run, check, run_dir))
+main = COMMAND.main
+hydra_entry = hydra_main(COMMAND)
+
+
+def bench_backends(cfg: DictConfig) -> list[str]:
+    backends = [str(b) for b in cfg.backends]
+    unknown = sorted(set(backends) - {"cpu", "warp"})
+    if unknown or not backends:
+        raise EvalError(f"backends={backends}: choose from cpu and warp, e.g. "
+                        "backends=[cpu,warp]")
+    return backends
+
+
+def bench_check(cfg: DictConfig, overrides: list[str]) -> EvalSpec:
+    """`bench.py eval`'s settings, checked before its run folder exists."""
     kind = policy_kind(cfg)
-    n, episodes, sequential = int(cfg.num_envs), int(cfg.episodes), int(cfg.sequential_episodes)
-    if min(n, episodes, sequential, int(cfg.horizon)) < 1:
-        raise EvalError("num_envs, episodes, sequential_episodes and horizon must be >= 1")
+    counts = (int(cfg.num_envs), int(cfg.episodes), int(cfg.sequential_episodes),
+              int(cfg.horizon))
+    if min(counts) < 1 or (cfg.warp_episodes is not None and int(cfg.warp_episodes) < 1):
+        raise EvalError("num_envs, episodes, sequential_episodes, warp_episodes and horizon "
+                        "must be >= 1")
+    bench_backends(cfg)
     task = str(cfg.task)
     embodiment = cfg.embodiment or task_class(task).default_embodiment
     check_pair(TASKS[task], embodiment)
-    run_dir = new_run_dir("bench", f"eval-{kind}-{cfg.task}", cfg)
-    checkpoint = cfg.checkpoint
-    if checkpoint is None and kind not in WITHOUT_CHECKPOINT:
+    if cfg.checkpoint is None and kind not in WITHOUT_CHECKPOINT:
         try:
-            spec = PolicySpec(obs=model_module(kind).OBS)
+            model_module(kind)
         except ValueError as err:
             raise EvalError(str(err)) from None
-        probe = build_env(cfg, TaskPlan(task, "", embodiment, None, spec), 2)
+    merged = OmegaConf.merge(cfg, {"episodes": max(counts[1], counts[2])})
+    return replace(spec_of(merged, untrained=True),
+                   embodiment=embodiment, num_envs=int(cfg.num_envs))
+
+
+def _rate(spec: EvalSpec, plan: TaskPlan, label: str, width: int, count: int,
+          progress: bool) -> float:
+    env = build_env(spec, plan, width)
+    policy = build_policy(spec, plan, env)
+    bar = tqdm(total=count, desc=f"{label} x{width}", unit="episode", disable=not progress,
+               leave=False)
+    with bar:
+        rate = episodes_per_minute(env, policy, count, spec.seed,
+                                   lambda _, bar=bar: bar.update(1))
+    print(f"{label}: {rate:,.1f} episodes/min ({width} env(s), {count} episodes of up to "
+          f"{spec.horizon} steps)")
+    return rate
+
+
+def bench_run(cfg: DictConfig, spec: EvalSpec, out: pathlib.Path) -> dict:
+    """Episodes/min of `num_envs` batched cpu envs against one env at a time, and on the
+    warp backend (`backends=[cpu,warp]`) with every episode a warp world; a JSON-ready
+    result written to `metrics.json`."""
+    kind, task = spec.kind, str(cfg.task)
+    run_dir = open_run_dir(out, cfg)
+    checkpoint = spec.checkpoint
+    if checkpoint is None and kind not in WITHOUT_CHECKPOINT:
+        probe_plan = TaskPlan(task, "", spec.embodiment, None,
+                              PolicySpec(obs=model_module(kind).OBS))
+        probe = build_env(spec, probe_plan, 2)
         checkpoint = str(untrained_checkpoint(kind, OmegaConf.to_container(cfg.policy), probe,
                                               run_dir / "untrained.pt"))
-    plan = plan_task(str(cfg.task), "", kind, checkpoint, cfg.embodiment, policy_options(cfg))
+    plan = plan_task(task, "", kind, checkpoint, cfg.embodiment, spec.options)
     if not isinstance(plan, TaskPlan):
-        raise EvalError(f"{cfg.task}: {plan}")
-    rates = {}
-    for label, width, count in (("batched", n, episodes), ("sequential", 1, sequential)):
-        env = build_env(cfg, plan, width)
-        policy = build_policy(cfg, plan, env)
-        bar = tqdm(total=count, desc=f"{label} x{width}", unit="episode",
-                   disable=not cfg.progress, leave=False)
-        with bar:
-            rates[label] = episodes_per_minute(env, policy, count, int(cfg.seed),
-                                               lambda _, bar=bar: bar.update(1))
-        print(f"{label}: {rates[label]:,.1f} episodes/min ({width} env(s), {count} "
-              f"episodes of up to {cfg.horizon} steps)")
+        raise EvalError(f"{task}: {plan}")
+    progress = bool(cfg.progress)
+    rates, n, episodes = {}, int(cfg.num_envs), int(cfg.episodes)
+    for backend in bench_backends(cfg):
+        on = replace(spec, env={**spec.env, "backend": backend,
+                                "renderer": "warp" if backend == "warp" else "cpu"})
+        if backend == "warp":
+            count = int(cfg.warp_episodes or episodes)
+            rates["warp"] = _rate(on, plan, "warp", count, count, progress)
+        else:
+            rates["batched"] = _rate(on, plan, "batched", n, episodes, progress)
+            rates["sequential"] = _rate(on, plan, "sequential", 1,
+                                        int(cfg.sequential_episodes), progress)
     result = {"benchmark": "eval", "task": plan.task, "embodiment": plan.embodiment,
-              "policy": kind, "checkpoint": checkpoint, "num_envs": n, "horizon": int(
-                  cfg.horizon), "batched_episodes": episodes, "sequential_episodes": sequential,
-              "device": _device(cfg.device), "torch_threads": torch.get_num_threads(),
-              "batched_eps_per_min": round(rates["batched"], 2),
-              "sequential_eps_per_min": round(rates["sequential"], 2),
-              "ratio": round(rates["batched"] / rates["sequential"], 2),
+              "policy": kind, "checkpoint": checkpoint, "num_envs": n,
+              "horizon": int(cfg.horizon), "batched_episodes": episodes,
+              "sequential_episodes": int(cfg.sequential_episodes),
+              "device": spec.policy_device(), "torch_threads": torch.get_num_threads(),
+              **{f"{k}_eps_per_min": round(v, 2) for k, v in rates.items()},
               "run_dir": str(run_dir)}
+    if "batched" in rates:
+        result["ratio"] = round(rates["batched"] / rates["sequential"], 2)
+    if "warp" in rates:
+        result["warp_episodes"] = int(cfg.warp_episodes or episodes)
+        result["gpu"] = torch.cuda.get_device_name(0) if torch.cuda.is_available() else None
+        if "batched" in rates:
+            result["warp_vs_cpu"] = round(rates["warp"] / rates["batched"], 2)
     write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
     return result
+
+
+def bench_eval(argv: list[str]) -> dict:
+    """Programmatic `python bench.py eval key=value ...`."""
+    cfg = load_config("bench_eval", argv)
+    spec = bench_check(cfg, argv)
+    return bench_run(cfg, spec, BENCH_EVAL.folder(cfg, stamp()))
+
+
+def _bench_dir(cfg: DictConfig) -> tuple[str, str]:
+    return "bench", f"{{stamp}}-eval-{policy_kind(cfg)}-{cfg.task}"
+
+
+def _bench_print(cfg: DictConfig, spec: EvalSpec, out: pathlib.Path) -> int:
+    print(json.dumps(bench_run(cfg, spec, out)))
+    return 0
+
+
+BENCH_EVAL = register(Command("bench_eval", _bench_print, bench_check, _bench_dir))

@@ -1,14 +1,24 @@
-"""`python -m dexbench list|inspect|docs|snapshot|validate ...`."""
+"""`python -m dexbench list|inspect|docs|snapshot|validate|merge|split ...`.
+
+`inspect`, `snapshot` and `validate` are Hydra mains (`--help`, `--cfg job`, ...) picked by
+the verb; `list`, `docs`, `merge` and `split` take plain arguments.
+"""
 
 from __future__ import annotations
 
 import json
+import pathlib
 import sys
 
+from omegaconf import DictConfig
+
+from dexbench.cli.app import Command, dispatch, register
 from dexbench.cli.config import env_kwargs, load_config
 from dexbench.cli.docs import write_docs
-from dexbench.cli.snapshot import snapshot
-from dexbench.cli.validate import validate
+from dexbench.cli.errors import run_cli
+from dexbench.cli.merge import merge
+from dexbench.cli.snapshot import SNAPSHOT
+from dexbench.cli.validate import VALIDATE
 from dexbench.embodiments.builder import embodiment_names, parse_embodiment
 from dexbench.tasks.registry import TASKS, make_env
 
@@ -18,7 +28,9 @@ USAGE = """usage:
   python -m dexbench inspect task=<Task> embodiment=<embodiment> [obs=<preset>]
   python -m dexbench docs             (regenerates docs/tasks.md)
   python -m dexbench snapshot task=<Task> embodiment=<embodiment> visual=<fixed|train|test>
-  python -m dexbench validate dataset=<dataset folder> [strict=true]"""
+  python -m dexbench validate dataset=<dataset folder> [strict=true]
+  python -m dexbench merge <eval run or sweep folder> ... [out=<folder>]
+  python -m dexbench split <split>   (its implemented tasks, comma-separated, for -m split_task=)"""
 
 
 def list_tasks() -> str:
@@ -36,7 +48,11 @@ def list_embodiments() -> str:
 
 
 def inspect(overrides: list[str]) -> str:
-    cfg = load_config("config", overrides)
+    """Programmatic `python -m dexbench inspect ...`: the JSON text."""
+    return describe(load_config("inspect", overrides))
+
+
+def describe(cfg: DictConfig) -> str:
     kwargs = env_kwargs(cfg)
     kwargs["num_envs"] = 1
     env = make_env(**kwargs)
@@ -60,20 +76,49 @@ def inspect(overrides: list[str]) -> str:
     return json.dumps(info, indent=2)
 
 
+def split_tasks(name: str) -> list[str]:
+    """The implemented tasks of split `conf/split/<name>.yaml`, in its order."""
+    cfg = load_config("eval", [f"+split={name}"])
+    tasks = [str(t) for ts in cfg.split.categories.values() for t in ts]
+    return [t for t in tasks if t in TASKS]
+
+
+def _print_inspect(cfg: DictConfig, _prepared: None, _out: pathlib.Path | None) -> int:
+    print(describe(cfg))
+    return 0
+
+
+def _check_inspect(cfg: DictConfig, overrides: list[str]) -> None:
+    env_kwargs(cfg)
+
+
+INSPECT = register(Command("inspect", _print_inspect, _check_inspect))
+VERBS = {"inspect": INSPECT, "snapshot": SNAPSHOT, "validate": VALIDATE}
+
+
 def main(argv: list[str]) -> int:
+    """Programmatic `python -m dexbench ...`; 2 with the usage for anything unknown."""
+    if argv[:1] and argv[0] in VERBS:
+        return VERBS[argv[0]].main(argv[1:])
     if argv[:2] == ["list", "tasks"]:
         print(list_tasks())
     elif argv[:2] == ["list", "embodiments"]:
         print(list_embodiments())
-    elif argv[:1] == ["inspect"]:
-        print(inspect(argv[1:]))
-    elif argv[:1] == ["snapshot"]:
-        print(f"wrote {snapshot(argv[1:])}")
     elif argv == ["docs"]:
         print(f"wrote {write_docs()}")
-    elif argv[:1] == ["validate"]:
-        return validate(argv[1:])
+    elif argv[:1] == ["merge"]:
+        return merge(argv[1:])
+    elif len(argv) == 2 and argv[0] == "split":
+        print(",".join(split_tasks(argv[1])))
     else:
         print(USAGE, file=sys.stderr)
         return 2
     return 0
+
+
+def entry() -> None:
+    """`python -m dexbench <verb> ...`: a Hydra main for inspect, snapshot and validate."""
+    if sys.argv[1:2] and sys.argv[1] in VERBS:
+        dispatch(VERBS, sys.argv[1:], USAGE)
+    else:
+        run_cli(main)

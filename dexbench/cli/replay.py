@@ -3,8 +3,9 @@
 `mode=states` (default) writes a new LeRobotDataset beside the source (or at `out=`)
 with the preset's observations regenerated from the recorded simulator states;
 `mode=actions` re-simulates the recorded actions instead and reports, per episode, the
-largest qpos drift and whether success is reached (a table, and JSON under
-`runs/replay/`). Task, embodiment, seed and variation come from the dataset.
+largest qpos drift and whether success is reached (a table, and `divergence.json` in
+the run folder `runs/replay/<timestamp>-<mode>-<dataset>/`). Task, embodiment, seed and
+variation come from the dataset.
 """
 
 from __future__ import annotations
@@ -13,8 +14,12 @@ import json
 import pathlib
 import sys
 
-from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir
+from omegaconf import DictConfig
+
+from dexbench.cli.app import Command, hydra_main, register
+from dexbench.cli.config import ConfigError, env_kwargs, open_run_dir
 from dexbench.data.files import write_json
+from dexbench.data.meta import DatasetError, read_meta, verify_files
 from dexbench.data.replay import default_out, replay_actions, replay_states
 
 # Settings a dataset fixes; replay takes only rendering and threading ones from the config.
@@ -33,15 +38,37 @@ def _table(report: dict) -> str:
     return "\n".join(lines)
 
 
-def main(argv: list[str]) -> int:
-    cfg = load_config("replay", argv)
+def _obs(cfg: DictConfig) -> str | list[str]:
+    return cfg.obs if isinstance(cfg.obs, str) else list(cfg.obs)
+
+
+def check(cfg: DictConfig, overrides: list[str]) -> dict:
+    """The settings, the mode and the dataset (whole, checksums verified); the env's
+    rendering and threading settings."""
     if not cfg.dataset:
         raise ConfigError("replay needs dataset=<folder of a collected dataset>")
-    source = pathlib.Path(cfg.dataset)
     settings = {k: v for k, v in env_kwargs(cfg).items() if k not in FROM_DATASET}
-    progress = bool(cfg.progress)
+    if cfg.mode not in ("states", "actions"):
+        raise ConfigError(f"unknown mode {cfg.mode!r}; modes: states, actions")
+    source = pathlib.Path(cfg.dataset)
+    verify_files(source, read_meta(source))
     if cfg.mode == "states":
-        obs = cfg.obs if isinstance(cfg.obs, str) else list(cfg.obs)
+        out = pathlib.Path(cfg.out) if cfg.out else default_out(source, _obs(cfg))
+        if out.exists():
+            raise DatasetError(f"{out} exists; remove it or pass out=<another folder>")
+    return settings
+
+
+def run_dir(cfg: DictConfig) -> tuple[str, str]:
+    return "replay", f"{{stamp}}-{cfg.mode}-{pathlib.Path(str(cfg.dataset)).name}"
+
+
+def run(cfg: DictConfig, settings: dict, out_dir: pathlib.Path) -> int:
+    source = pathlib.Path(cfg.dataset)
+    progress = bool(cfg.progress)
+    run_folder = open_run_dir(out_dir, cfg)
+    if cfg.mode == "states":
+        obs = _obs(cfg)
         out = pathlib.Path(cfg.out) if cfg.out else default_out(source, obs)
         changes = replay_states(source, out, obs, num_envs=int(cfg.num_envs),
                                 force=bool(cfg.force), progress=progress, **settings)
@@ -49,16 +76,18 @@ def main(argv: list[str]) -> int:
             print(f"warning: recorded with other code: {change}", file=sys.stderr)
         print(f"wrote {out}")
         print(json.dumps({"dataset": str(out), "source": str(source), "obs": obs}))
-    elif cfg.mode == "actions":
+    else:
         report = replay_actions(source, num_envs=int(cfg.num_envs), progress=progress,
                                 **settings)
-        run_dir = new_run_dir("replay", f"actions-{source.name}", cfg)
-        write_json(run_dir / "divergence.json", report)
+        write_json(run_folder / "divergence.json", report)
         print(_table(report))
-        print(json.dumps({"divergence": str(run_dir / "divergence.json"),
+        print(json.dumps({"divergence": str(run_folder / "divergence.json"),
                           "max_abs_qpos_error": report["max_abs_qpos_error"],
                           "successes": report["successes"],
                           "episodes": len(report["episodes"])}))
-    else:
-        raise ConfigError(f"unknown mode {cfg.mode!r}; modes: states, actions")
     return 0
+
+
+COMMAND = register(Command("replay", run, check, run_dir))
+main = COMMAND.main
+hydra_entry = hydra_main(COMMAND)

@@ -4,7 +4,8 @@ Trains on the task's dense reward (plus the grasp and action terms of
 `dexbench.rl.rewards`) with the state observation groups for the actor and those plus
 `privileged` for the critic, on `sim.backend` (warp on a GPU; cpu for smoke tests:
 `sim.backend=cpu num_envs=4 rl.max_iterations=2`). Stops after `rl.max_iterations` or
-`rl.max_minutes`, whichever comes first. Writes `runs/rl/<timestamp>-<task>-<emb>/`:
+`rl.max_minutes`, whichever comes first. Writes `runs/rl/<timestamp>-<task>-<emb>/`
+(Hydra's run folder):
 config, RSL-RL checkpoints (`model_<it>.pt`) and TensorBoard logs, `policy.json` (what
 `python eval.py policy=rl checkpoint=<folder>` needs), `curve.jsonl` and `curve.png`
 (success of finished training episodes vs wall time) and `metrics.json`.
@@ -22,15 +23,24 @@ from omegaconf import DictConfig, OmegaConf
 from rsl_rl.runners import OnPolicyRunner
 from tqdm import tqdm
 
-from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, write_atomic
+from dexbench.cli.app import Command, hydra_main, register, stamp
+from dexbench.cli.config import (
+    ConfigError,
+    default_embodiment,
+    env_kwargs,
+    load_config,
+    open_run_dir,
+    write_atomic,
+)
 from dexbench.envs.dex_env import DexEnv
+from dexbench.envs.scene import check_pair
 from dexbench.policies.rl import META_FILE
 from dexbench.rl.actions import ActionMap
 from dexbench.rl.config import runner_config
 from dexbench.rl.curve import plot_curve
 from dexbench.rl.rewards import RewardWeights
 from dexbench.rl.vec_env import ACTOR_GROUPS, CRITIC_EXTRA, RslVecEnv
-from dexbench.tasks.registry import make_env
+from dexbench.tasks.registry import make_env, task_class
 
 
 def _device(cfg: DictConfig, env: DexEnv) -> str:
@@ -79,14 +89,32 @@ def _meta(cfg: DictConfig, env: DexEnv, vec: RslVecEnv) -> dict:
             "control_dt": env.control_dt, "sim_backend": str(cfg.sim.backend)}
 
 
-def train(overrides: list[str]) -> dict:
-    cfg = load_config("rl", overrides)
+def check(cfg: DictConfig, overrides: list[str]) -> None:
     rl = cfg.rl
     if int(rl.max_iterations) < 1 or float(rl.max_minutes) <= 0:
         raise ConfigError("rl.max_iterations must be >= 1 and rl.max_minutes > 0")
+    if cfg.obs != "state":
+        raise ConfigError(f"rl.py trains on state observations; got obs={cfg.obs}")
+    env_kwargs(cfg)
+    check_pair(task_class(cfg.task), default_embodiment(cfg))
+
+
+def run_dir(cfg: DictConfig) -> tuple[str, str]:
+    return "rl", f"{{stamp}}-{cfg.task}-{default_embodiment(cfg)}"
+
+
+def train(overrides: list[str]) -> dict:
+    """Programmatic `python rl.py ...`: the result."""
+    cfg = load_config("rl", overrides)
+    check(cfg, overrides)
+    return train_in(cfg, COMMAND.folder(cfg, stamp()))
+
+
+def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
+    rl = cfg.rl
     torch.manual_seed(int(cfg.seed))
     env = build_env(cfg)
-    run_dir = new_run_dir("rl", f"{env.task.name}-{env.embodiment.name}", cfg)
+    run_dir = open_run_dir(out, cfg)
     vec = RslVecEnv(env, action_map(cfg, env), RewardWeights(**rl.rewards),
                     int(rl.num_steps_per_env), episode_steps(cfg, env),
                     cfg=OmegaConf.to_container(cfg, resolve=True))
@@ -136,10 +164,15 @@ def _latest_model(run_dir: pathlib.Path) -> pathlib.Path:
     return max(run_dir.glob("model_*.pt"), key=lambda p: p.stat().st_mtime)
 
 
-def main(argv: list[str]) -> int:
-    result = train(argv)
+def run(cfg: DictConfig, _prepared: None, out: pathlib.Path) -> int:
+    result = train_in(cfg, out)
     print(f"trained {result['iterations']} iterations in {result['wall_s']} s; "
           f"evaluate: python eval.py task={result['task']} embodiment={result['embodiment']} "
           f"policy=rl checkpoint={result['run_dir']}")
     print(json.dumps(result))
     return 0
+
+
+COMMAND = register(Command("rl", run, check, run_dir))
+main = COMMAND.main
+hydra_entry = hydra_main(COMMAND)

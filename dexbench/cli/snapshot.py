@@ -8,14 +8,19 @@ for humans to check a scene, its cameras and its variation.
 
 from __future__ import annotations
 
+import pathlib
+
 import numpy as np
 import torch
+from omegaconf import DictConfig
 from PIL import Image, ImageDraw, ImageFont
 
-from dexbench.cli.config import env_kwargs, load_config, new_run_dir
+from dexbench.cli.app import Command, register, stamp
+from dexbench.cli.config import default_embodiment, env_kwargs, load_config, open_run_dir
 from dexbench.envs.arena import TABLE_HALF_SIZE
 from dexbench.envs.camera_obs import CROP_HI, CROP_LO, THIRD_PERSON
-from dexbench.tasks.registry import make_env
+from dexbench.envs.scene import check_pair
+from dexbench.tasks.registry import make_env, task_class
 
 FONT_PX = 12
 LINE_PX = FONT_PX + 3
@@ -84,8 +89,13 @@ def contact_sheet(rows: list[list[np.ndarray]], labels: list[tuple[str, str]]) -
 
 
 def snapshot(overrides: list[str]) -> str:
-    cfg = load_config("config", ["num_envs=4", "camera.width=160", "camera.height=120",
-                                 *overrides])
+    """Programmatic `python -m dexbench snapshot ...`: the PNG's path."""
+    cfg = load_config("snapshot", overrides)
+    env_kwargs(cfg)
+    return snapshot_in(cfg, SNAPSHOT.folder(cfg, stamp()))
+
+
+def snapshot_in(cfg: DictConfig, out: pathlib.Path) -> str:
     kwargs = env_kwargs(cfg)
     embodiment_env = make_env(**{**kwargs, "num_envs": 1})
     wrists = [f"{side}/hand/wrist_cam" for side in embodiment_env.embodiment.sides]
@@ -97,9 +107,26 @@ def snapshot(overrides: list[str]) -> str:
     rows = [[*(obs[f"rgb/{c}"][e] for c in cameras), _depth_image(obs["depth/front"][e]),
              _cloud_image(obs["pointcloud"][e], size)] for e in range(env.num_envs)]
     sheet = contact_sheet(rows, column_labels(cameras))
-    run_dir = new_run_dir("snapshot", f"{env.task.name}-{env.embodiment.name}", cfg)
+    run_dir = open_run_dir(out, cfg)
     path = run_dir / "snapshot.png"
     tmp = run_dir / ".snapshot.png.tmp"
     sheet.save(tmp, format="PNG")
     tmp.replace(path)
     return str(path)
+
+
+def _check(cfg: DictConfig, overrides: list[str]) -> None:
+    env_kwargs(cfg)
+    check_pair(task_class(cfg.task), default_embodiment(cfg))
+
+
+def _run(cfg: DictConfig, _prepared: None, out: pathlib.Path) -> int:
+    print(f"wrote {snapshot_in(cfg, out)}")
+    return 0
+
+
+def _dir(cfg: DictConfig) -> tuple[str, str]:
+    return "snapshot", f"{{stamp}}-{cfg.task}-{default_embodiment(cfg)}"
+
+
+SNAPSHOT = register(Command("snapshot", _run, _check, _dir))

@@ -4,7 +4,9 @@ Reads the demonstrations `python collect.py task=<T> embodiment=<E>` wrote (or
 `dataset=<folder>`); DP3 first replays them to the `pointcloud` preset (once: the replay
 is kept beside the dataset). Writes `best.pt`/`last.pt`, the resolved config,
 `metrics.csv`, TensorBoard logs and `summary.json` under
-`runs/train/<task>/<embodiment>/<policy>/<timestamp>/`.
+`runs/train/<task>/<embodiment>/<policy>/<timestamp>-seed<seed>/` (a sweep, `-m
+policy=dp,dp3 task=A,B`: `runs/train/multirun/<time>/<task>/<embodiment>/<policy>/<job>/`,
+the layout `eval.py checkpoint=<folder>` reads per task).
 """
 
 from __future__ import annotations
@@ -14,14 +16,22 @@ import importlib.util
 import json
 import pathlib
 import sys
+from dataclasses import dataclass
 from types import ModuleType
 
 import torch
 from omegaconf import DictConfig, OmegaConf
 
-from dexbench.cli.config import ConfigError, env_kwargs, load_config, new_run_dir, runs_root
+from dexbench.cli.app import Command, hydra_main, register
+from dexbench.cli.config import (
+    ConfigError,
+    default_embodiment,
+    env_kwargs,
+    open_run_dir,
+    runs_root,
+)
 from dexbench.data.files import write_json
-from dexbench.data.meta import DatasetError
+from dexbench.data.meta import DatasetError, read_meta
 from dexbench.envs.scene import check_pair
 from dexbench.policies.common.checkpoint import save_checkpoint
 from dexbench.policies.common.demos import Demos, available_groups, load_demos
@@ -103,8 +113,18 @@ def settings_of(cfg: DictConfig) -> TrainSettings:
         progress=bool(cfg.progress))
 
 
-def main(argv: list[str]) -> int:
-    cfg = load_config("train", argv)
+@dataclass
+class Prepared:
+    cfg: DictConfig  # with the dataset's embodiment and the epochs filled in
+    model: ModuleType
+    settings: TrainSettings
+    device: torch.device
+    demos: Demos
+
+
+def check(cfg: DictConfig, overrides: list[str]) -> Prepared:
+    """Settings, device and the demonstrations (checksums verified, replayed to the
+    policy's observations when needed), before the run folder exists."""
     model_mod = model_module(cfg.policy.name)
     if cfg.embodiment:  # before looking for demonstrations that could never exist
         check_pair(task_class(cfg.task), cfg.embodiment)
@@ -122,14 +142,31 @@ def main(argv: list[str]) -> int:
                           f"task={meta['task']} embodiment={meta['embodiment']}")
     cfg = OmegaConf.merge(cfg, {"embodiment": meta["embodiment"],
                                 "dataset": demos.source, "train": {"epochs": settings.epochs}})
+    return Prepared(cfg, model_mod, settings, device, demos)
+
+
+def run_dir(cfg: DictConfig) -> tuple[str, str]:
+    """`train/<task>/<embodiment>/<policy>`, the embodiment the dataset's when not given."""
+    embodiment = cfg.embodiment
+    if not embodiment and cfg.dataset and pathlib.Path(str(cfg.dataset)).is_dir():
+        try:
+            embodiment = read_meta(pathlib.Path(str(cfg.dataset)))["embodiment"]
+        except DatasetError:
+            embodiment = None  # check() reports it
+    embodiment = embodiment or default_embodiment(cfg)
+    return f"train/{cfg.task}/{embodiment}/{cfg.policy.name}", f"{{stamp}}-seed{cfg.seed}"
+
+
+def run(_cfg: DictConfig, prepared: Prepared, out: pathlib.Path) -> int:
+    cfg, model_mod, settings = prepared.cfg, prepared.model, prepared.settings
+    device, demos, meta = prepared.device, prepared.demos, prepared.demos.meta
     torch.manual_seed(settings.seed)
     shapes = {g: tuple(v.shape[1:]) for g, v in demos.obs.items()}
     layout = list(meta["action_layout"]["actuators"])
     policy_cfg = OmegaConf.to_container(cfg.policy)
     model = model_mod.make_model(policy_cfg, shapes, len(layout))
     normalizer = fit_normalizer(demos)
-    run_dir = new_run_dir(f"train/{meta['task']}/{meta['embodiment']}/{cfg.policy.name}",
-                          f"seed{settings.seed}", cfg)
+    run_dir = open_run_dir(out, cfg)
     config = OmegaConf.to_container(cfg)
     fixed = {"kind": cfg.policy.name, "task": meta["task"], "embodiment": meta["embodiment"],
              "obs": model_mod.OBS, "groups": list(demos.obs),
@@ -160,3 +197,8 @@ def main(argv: list[str]) -> int:
     write_json(run_dir / "summary.json", summary)
     print(json.dumps(summary))
     return 0
+
+
+COMMAND = register(Command("train", run, check, run_dir))
+main = COMMAND.main
+hydra_entry = hydra_main(COMMAND)

@@ -5,15 +5,20 @@ from __future__ import annotations
 import json
 import pathlib
 
-from dexbench.cli.config import ConfigError, load_config
+from omegaconf import DictConfig
+
+from dexbench.cli.app import Command, register
+from dexbench.cli.config import ConfigError
 from dexbench.data.validate import validate_dataset
 
 
-def validate(overrides: list[str]) -> int:
-    """Print the report; exit 1 on errors (or on warnings with strict=true)."""
-    cfg = load_config("validate", overrides)
+def _check(cfg: DictConfig, overrides: list[str]) -> None:
     if not cfg.dataset:
         raise ConfigError("validate needs dataset=<dataset folder>")
+
+
+def _run(cfg: DictConfig, _prepared: None, _out: pathlib.Path | None) -> int:
+    """Print the report; exit 1 on errors (or on warnings with strict=true)."""
     report = validate_dataset(pathlib.Path(cfg.dataset), check_code=bool(cfg.check_code),
                               nthread=int(cfg.nthread))
     for error in report.errors:
@@ -25,3 +30,7 @@ def validate(overrides: list[str]) -> int:
     print(json.dumps({"dataset": str(report.root), "ok": not failed, **report.summary,
                       "errors": report.errors, "warnings": report.warnings}))
     return 1 if failed else 0
+
+
+VALIDATE = register(Command("validate", _run, _check))
+validate = VALIDATE.main

@@ -1,5 +1,9 @@
 """The paper-style table from several evaluation runs: tasks x policies, grouped by
-category with a mean row per category and overall, the best value of each row in bold."""
+category with a mean row per category and overall, the best value of each row in bold.
+
+A folder without `results.json` stands for every run below it (a `-m` sweep's folder).
+Runs of one policy label on disjoint tasks (a split swept one task per job) share one
+column; runs of one label that overlap get a column each, named by their folders."""
 
 from __future__ import annotations
 
@@ -34,10 +38,34 @@ def load_results(run_dir: pathlib.Path) -> dict:
     return json.loads(path.read_text())
 
 
+def expand_runs(paths: list[pathlib.Path]) -> list[pathlib.Path]:
+    """Each path, or the runs below it (in job order) when it is no run itself."""
+    runs = []
+    for path in paths:
+        if (path / RESULTS_FILE).exists() or not path.is_dir():
+            runs.append(path)
+            continue
+        found = [r.parent for r in path.rglob(RESULTS_FILE)]
+        if not found:
+            raise MergeError(f"{path} has no {RESULTS_FILE}, nor any run below it: pass "
+                             "evaluation run folders (runs/eval/<split>/<policy>/<run>) or a "
+                             "sweep's folder (runs/eval/multirun/<time>)")
+        runs += sorted(found, key=lambda r: (int(r.name) if r.name.isdigit() else -1, str(r)))
+    return runs
+
+
 def _labels(summaries: list[dict], run_dirs: list[pathlib.Path]) -> list[str]:
+    """A column per run: its policy label, shared by runs of that label on disjoint
+    tasks, else made unique with the run folder's name."""
     labels = [s["policy_label"] for s in summaries]
-    return [f"{label} ({d.name})" if labels.count(label) > 1 else label
-            for label, d in zip(labels, run_dirs, strict=True)]
+    tasks = [[t["task"] for t in s["tasks"]] for s in summaries]
+    out = []
+    for label, d in zip(labels, run_dirs, strict=True):
+        same = [ts for lb, ts in zip(labels, tasks, strict=True) if lb == label]
+        flat = [t for ts in same for t in ts]
+        disjoint = len(flat) == len(set(flat))
+        out.append(label if len(same) == 1 or disjoint else f"{label} ({d.name})")
+    return out
 
 
 def _mean(values: list[float | None]) -> float | None:
@@ -50,11 +78,13 @@ def merge_runs(run_dirs: list[pathlib.Path]) -> MergedTable:
     it evaluated (a missing cell shows as '-')."""
     if not run_dirs:
         raise MergeError("name at least one evaluation run folder to merge")
+    run_dirs = expand_runs(run_dirs)
     summaries = [load_results(d) for d in run_dirs]
-    policies = _labels(summaries, run_dirs)
+    columns = _labels(summaries, run_dirs)
+    policies = list(dict.fromkeys(columns))
     order: dict[str, list[str]] = {}
     cells: dict[str, dict[str, float | None]] = {}
-    for policy, summary in zip(policies, summaries, strict=True):
+    for policy, summary in zip(columns, summaries, strict=True):
         for t in summary["tasks"]:
             if t["task"] not in cells:
                 order.setdefault(t["category"], []).append(t["task"])
