@@ -13,7 +13,7 @@ import pytest
 import torch
 from torch.overrides import TorchFunctionMode
 
-from dexbench.cli.docs import docs_path, tasks_markdown
+from dexbench.cli.docs import docs_path, tasks_markdown, thumbs_path
 from dexbench.tasks.registry import TASKS, make_env
 
 PENETRATION_LIMIT = 0.002  # m
@@ -345,3 +345,5 @@ def test_makecoffee_stages_latch_in_order():
 
 def test_docs_are_generated_from_the_task_definitions():
     assert docs_path().read_text() == tasks_markdown(), "run `python -m dexbench docs`"
+    missing = [name for name in TASKS if not (thumbs_path() / f"{name}.png").is_file()]
+    assert not missing, f"no thumbnail for {missing}: run `python -m dexbench docs`"

@@ -27,9 +27,10 @@ def add_pan(spec: mujoco.MjSpec, name: str, radius: float = 0.10, depth: float =
             handle_length: float = 0.17, mass: float = 0.3) -> ObjectInfo:
     """A frying pan (flared wall, `radius` at the rim) with a long handle along +x.
 
-    The handle is a 2.2 cm thick capsule rising 10 deg from the rim, so it stays clear
-    of the table. The non-stick floor disc (body `<name>/surface`) is the cooking surface
-    a hand must not touch. Points: `centre` (bottom centre, what sits on a burner),
+    The handle is a 2.2 cm thick capsule rising 25 deg from the rim, like a real pan's: its
+    outer half is high enough off the table for fingers to close under it. The non-stick
+    floor disc (body `<name>/surface`) is the cooking surface a hand must not touch.
+    Points: `centre` (bottom centre, what sits on a burner),
     `handle` (middle of the handle), `handle_end`. Axes: `up`, `handle` (rim to end).
     """
     wall, floor = 0.004, 0.005
@@ -40,7 +41,7 @@ def add_pan(spec: mujoco.MjSpec, name: str, radius: float = 0.10, depth: float =
     inner = radius_at(profile, floor) - wall - 0.002
     add_geom(surface, f"{name}/surface", "cylinder", [inner, 0.001], COATING, 0.03 * mass,
              pos=[0, 0, 0.001])
-    pitch = math.radians(10.0)
+    pitch = math.radians(25.0)
     start = (radius + 0.002, 0.0, depth - 0.008)
     end = (start[0] + handle_length * math.cos(pitch), 0.0,
            start[2] + handle_length * math.sin(pitch))

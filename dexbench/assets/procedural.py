@@ -11,29 +11,43 @@ from collections.abc import Sequence
 
 import mujoco
 
-from dexbench.assets.meshes import add_lathe_object
+from dexbench.assets.meshes import add_lathe_object, radius_at
 from dexbench.assets.objects import ObjectInfo, Vec3, Zone, add_geom
+from dexbench.assets.vessels import ring_zone
 
 UP = (0.0, 0.0, 1.0)
 
 
 def _open_info(name: str, radius: float, height: float, reach: float,
-               extra_points: dict[str, tuple[str, Vec3]] | None = None) -> ObjectInfo:
+               extra_points: dict[str, tuple[str, Vec3]] | None = None,
+               zone: Zone | None = None) -> ObjectInfo:
+    """`zone` defaults to the rim volume on the root body (contacts there, on the wall)."""
     rim = (0.0, 0.0, height)
     return ObjectInfo(name, name, f"{name}/free", False, 0.0, reach,
                       points={"rim": (name, rim), "bottom": (name, (0.0, 0.0, 0.0)),
                               **(extra_points or {})},
                       axes={"up": (name, UP)},
-                      zones=(Zone(name, "cylinder", rim, radius + 0.005, 0.01),))
+                      zones=(zone or Zone(name, "cylinder", rim, radius + 0.005, 0.01),))
 
 
 def add_cup(spec: mujoco.MjSpec, name: str, radius: float = 0.035, height: float = 0.10,
-            wall: float = 0.004, mass: float = 0.12,
+            wall: float = 0.004, mass: float = 0.12, band: float = 0.01,
             rgba: Sequence[float] = (0.3, 0.6, 0.85, 1.0)) -> ObjectInfo:
-    """A handle-less cup, slightly narrower at the foot; `radius` is at the rim."""
+    """A handle-less cup, slightly narrower at the foot; `radius` is at the rim.
+
+    The wall's top `band` (m) is the no-touch rim: its own pieces in the zone body
+    `<name>/rim` (their share of the mass by height), the rest of the cup in the root.
+    """
     profile = [(0.8 * radius, 0.0), (radius, height)]
-    add_lathe_object(spec, name, profile, wall, mass, rgba, bottom_thickness=0.006)
-    return _open_info(name, radius, height, radius)
+    below = height - band
+    r_below = radius_at(profile, below)
+    body = add_lathe_object(spec, name, [profile[0], (r_below, below)], wall,
+                            mass * below / height, rgba, bottom_thickness=0.006)
+    radii = ((r_below - wall, r_below), (radius - wall, radius))
+    ring_zone(spec, body, f"{name}/rim", below, radii, band, mass * band / height, rgba)
+    zone = Zone(f"{name}/rim", "cylinder", (0.0, 0.0, band / 2), radius + 0.005,
+                band / 2 + 0.003)
+    return _open_info(name, radius, height, radius, zone=zone)
 
 
 def add_mug(spec: mujoco.MjSpec, name: str, radius: float = 0.04, height: float = 0.095,

@@ -21,6 +21,24 @@ STEEL = (0.72, 0.74, 0.78, 1.0)
 BLACK = (0.12, 0.12, 0.13, 1.0)
 
 
+def ring_zone(spec: mujoco.MjSpec, parent: mujoco.MjsBody, name: str, z: float,
+              radii: tuple[tuple[float, float], tuple[float, float]], height: float,
+              mass: float, rgba: Sequence[float], sectors: int = 16) -> mujoco.MjsBody:
+    """A no-touch band round a vessel's opening (a can's lip, a cup's rim): the zone body
+    `name`, `z` up `parent`'s axis, holding a ring of `sectors` convex pieces `height`
+    tall whose (inner, outer) radii go from `radii[0]` at its foot to `radii[1]` at its
+    top (a conical wall's band continues the wall below it)."""
+    body = zone_body(parent, name, (0.0, 0.0, z))
+    half = math.pi / sectors
+    rings = [sector(inner, outer, half) for inner, outer in radii]
+    mesh = add_mesh(spec, name, *loft_mesh(rings, [0.0, height]))
+    for k in range(sectors):
+        turn = [math.cos(half * k), 0.0, 0.0, math.sin(half * k)]
+        body.add_geom(name=f"{name}{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh,
+                      quat=turn, rgba=list(rgba), condim=4, mass=mass / sectors)
+    return body
+
+
 def add_can(spec: mujoco.MjSpec, name: str, radius: float = 0.033, height: float = 0.10,
             wall: float = 0.003, mass: float = 0.12,
             label: Sequence[float] = (0.75, 0.12, 0.1, 1.0)) -> ObjectInfo:
@@ -35,16 +53,8 @@ def add_can(spec: mujoco.MjSpec, name: str, radius: float = 0.033, height: float
                             bottom_thickness=0.004)
     add_visual(body, f"{name}/label", "cylinder", [radius + 5e-4, 0.35 * height], label,
             pos=[0, 0, 0.5 * height])
-    lip = zone_body(body, f"{name}/lip", (0.0, 0.0, height))
-    sectors = 16
-    half = math.pi / sectors
-    ring = sector(radius - wall, radius + 0.001, half)
-    verts, faces = loft_mesh([ring, ring], [0.0, lip_h])
-    mesh = add_mesh(spec, f"{name}/lip", verts, faces)
-    for k in range(sectors):
-        turn = [math.cos(half * k), 0.0, 0.0, math.sin(half * k)]
-        lip.add_geom(name=f"{name}/lip{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh,
-                     quat=turn, rgba=list(STEEL), condim=4, mass=0.1 * mass / sectors)
+    ring = (radius - wall, radius + 0.001)
+    ring_zone(spec, body, f"{name}/lip", height, (ring, ring), lip_h, 0.1 * mass, STEEL)
     top = (0.0, 0.0, height + lip_h)
     return ObjectInfo(name, name, f"{name}/free", False, 0.0, radius + 0.001,
                       points={"lip": (name, top), "bottom": (name, (0.0, 0.0, 0.0))},

@@ -13,13 +13,16 @@ from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.experts.bimanual import TwoHandLiftExpert
 from dexbench.experts.grasp import GraspExpert, LevelGraspExpert
+from dexbench.experts.hold_actuate import HoldActuateExpert
 from dexbench.experts.insert import InsertExpert
+from dexbench.experts.path_push import PathPushExpert
 from dexbench.experts.pour import PourExpert
 from dexbench.experts.press import PressExpert
 from dexbench.experts.push import PushExpert
 from dexbench.experts.reach import ReachExpert
 from dexbench.experts.sequence import SequenceExpert
 from dexbench.experts.stack import StackLiftExpert
+from dexbench.experts.strike import StrikeExpert
 from dexbench.experts.turn import TurnExpert
 from dexbench.tasks import plans
 
@@ -29,18 +32,23 @@ KINDS: dict[type, Any] = {
     plans.PressPlan: PressExpert,
     plans.TurnPlan: TurnExpert,
     plans.PushPlan: PushExpert,
+    plans.PathPushPlan: PathPushExpert,
     plans.TwoHandPlan: TwoHandLiftExpert,
     plans.InsertPlan: InsertExpert,
     plans.PourPlan: PourExpert,
     plans.ReachPlan: ReachExpert,
     plans.StackLiftPlan: StackLiftExpert,
+    plans.StrikePlan: StrikeExpert,
 }
 
 
 def build_expert(env: DexEnv, plan: Any) -> Expert:
-    """The expert running `plan` (any kind, or a `SequencePlan`) on `env`."""
+    """The expert running `plan` (any kind, or a `SequencePlan` or `HoldActuatePlan` of
+    them) on `env`."""
     if isinstance(plan, plans.SequencePlan):
         return SequenceExpert(env, plan, build_expert)
+    if isinstance(plan, plans.HoldActuatePlan):
+        return HoldActuateExpert(env, plan, lambda hold, side: KINDS[type(hold)](env, hold, side))
     try:
         return KINDS[type(plan)](env, plan)
     except KeyError:

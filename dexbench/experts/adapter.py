@@ -39,8 +39,8 @@ def site_pose(env: DexEnv, site: int) -> tuple[np.ndarray, np.ndarray]:
     """(N, 3) positions and (N, 3, 3) frames of one site in every env (copies: the
     simulator overwrites its arrays on the next step)."""
     sim = env.sim
-    pos = sim.field("site_xpos")[:, site].numpy().copy()
-    return pos, sim.field("site_xmat")[:, site].numpy().reshape(-1, 3, 3).copy()
+    pos = sim.field("site_xpos")[:, site].cpu().numpy().copy()
+    return pos, sim.field("site_xmat")[:, site].cpu().numpy().reshape(-1, 3, 3).copy()
 
 
 def tips_in_palm_frame(env: DexEnv, palm: int, tips: list[int],
@@ -48,7 +48,7 @@ def tips_in_palm_frame(env: DexEnv, palm: int, tips: list[int],
     """The palm site's pose in every env and the fingertip sites' offsets from it in the
     palm frame, (N, len(tips), 3): where the fingers are, whatever the palm's pose."""
     pos, rot = site_pose(env, palm)
-    sites = env.sim.field("site_xpos").numpy()[:, tips]
+    sites = env.sim.field("site_xpos").cpu().numpy()[:, tips]
     return pos, rot, np.einsum("nji,nkj->nki", rot, sites - pos[:, None])
 
 
@@ -96,13 +96,13 @@ class ActionAdapter:
         for side, (_, joints, _, _) in self._sides.items():
             if side in self._solution:
                 qadr = [self.model.joint(j).qposadr[0] for j in joints]
-                qpos = self.env.sim.field("qpos").numpy()
+                qpos = self.env.sim.field("qpos").cpu().numpy()
                 self._solution[side][env_ids] = qpos[np.ix_(env_ids, qadr)]
 
     def actions(self, commands: dict[str, HandCommand]) -> torch.Tensor:
         """(N, action_dim) joint targets realising `commands` (one per hand side)."""
         n = self.env.num_envs
-        qpos = self.env.sim.field("qpos").numpy()
+        qpos = self.env.sim.field("qpos").cpu().numpy()
         out = np.repeat(self._poses["home"][None], n, axis=0)
         data, model = self._scratch, self.model
         for side, cmd in commands.items():

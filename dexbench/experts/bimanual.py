@@ -3,7 +3,9 @@
 For trays and similar wide objects held at two opposite rims (BimanualLiftTray). Each
 hand comes down palm-down on its grip point with the fingers pointing at the object's
 centre, curls its fingers over and inside the rim, then pulls outward so the curled
-fingers press the rim: the two pulls balance, and friction carries the object. Both
+fingers press the rim: the two pulls balance, and friction carries the object. A closed
+box (BimanualLiftCarton, `press`) has no rim: each open palm comes in from the side onto
+the middle of a side face and pushes on into it, and the two pushes squeeze the box. Both
 palms then rise by the same height, which keeps the object level. When the object slips
 (a grip point leaves its hand, or it tilts), both hands open, back off and try again.
 
@@ -50,6 +52,19 @@ PULL_SECONDS = 0.4
 LOST_DISTANCE = 0.04  # m a grip point may move in its hand before the grip counts as lost
 LOST_TILT = 8.0  # deg: the task fails at 10, so regrasp before
 OPEN_SECONDS = 0.4
+CUBE_HALF = 0.025  # m: `grasp_offset` is where a 5 cm cube's centre sits in the hand
+
+
+FLOOR_GAP = 0.015  # m: a pressing hand's longest fingertip above the object's base
+
+
+def facing(yaw: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) hand frames with the palm facing world yaw `yaw` (N,), horizontally, and
+    the fingers pointing down: the forearm, thicker than the palm, stays above a box a
+    level hand would touch with it."""
+    z = np.column_stack([np.cos(yaw), np.sin(yaw), np.zeros(len(yaw))])
+    x = np.broadcast_to([0.0, 0.0, -1.0], z.shape)
+    return np.stack([x, np.cross(z, x), z], axis=2)
 
 
 class TwoHandLiftExpert:
@@ -66,7 +81,13 @@ class TwoHandLiftExpert:
         layouts = env.embodiment.sides
         self._palm_site = {s: model.site(layouts[s].palm_site).id for s in plan.grips}
         self._thumb_site = {s: model.site(layouts[s].fingertip_sites[0]).id for s in plan.grips}
-        self._offset = np.asarray(env.embodiment.hand.grasp_offset) + np.asarray(plan.shift)
+        self._tip_sites = {s: [model.site(t).id for t in layouts[s].fingertip_sites]
+                           for s in plan.grips}
+        self._rest = info.rest_height
+        grasp = np.asarray(env.embodiment.hand.grasp_offset)
+        if plan.press:  # the palm, not a held cube's centre, on the grip point
+            grasp = grasp - [0.0, 0.0, CUBE_HALF]
+        self._offset = grasp + np.asarray(plan.shift)
         self._dt = env.control_dt
         n = env.num_envs
         self.phase = np.zeros(n, dtype=np.int64)
@@ -91,30 +112,46 @@ class TwoHandLiftExpert:
         thumb_y = {}
         for side in self.plan.grips:
             pos, rot = self._palm(side)
-            thumb = self.env.sim.field("site_xpos")[:, self._thumb_site[side]].numpy()
+            thumb = self.env.sim.field("site_xpos")[:, self._thumb_site[side]].cpu().numpy()
             thumb_y[side] = (rot[env].T @ (thumb[env] - pos[env]))[1]
         ref = thumb_y.get("right", next(iter(thumb_y.values())))
         return {s: 1.0 if y * ref >= 0 else -1.0 for s, y in thumb_y.items()}
+
+    def _hang(self, side: str, env: int) -> float:
+        """How far below the palm (along the fingers) a pressing hand's grip point lies,
+        for its longest open finger to end `FLOOR_GAP` above the object's base. Read in
+        a just-reset env `env`."""
+        pos, rot = self._palm(side)
+        tips = self.env.sim.field("site_xpos")[env, self._tip_sites[side]].cpu().numpy()
+        reach = ((tips - pos[env]) @ rot[env][:, 0]).max()
+        view = self.env.view
+        point = view.point_pos(*self._points[side])[env, 2]
+        base = view.body_pos(self.body)[env, 2] - self._rest
+        return float(reach + FLOOR_GAP - (point - base))
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
         for side, mirror in self._mirror(int(ids[0])).items():
             self.offset[side] = self._offset * [1.0, mirror, 1.0]
+            if self.plan.press:
+                self.offset[side][0] = self._hang(side, int(ids[0]))
             pos, rot = self._palm(side)
             self.pos[side][ids], self.rot[side][ids] = pos[ids], rot[ids]
         self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0
         self.adapter.reset(ids)
 
     def _grip_poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-        """Per side: the grip point (world) and the palm-down hand frame whose fingers
-        point from it at the object's centre."""
+        """Per side: the grip point (world) and the hand frame there: palm-down, fingers
+        pointing from it at the object's centre, or (`press`) palm facing the centre,
+        fingers down."""
         view = self.env.view
-        centre = view.body_pos(self.body).numpy()
+        centre = view.body_pos(self.body).cpu().numpy()
         poses = {}
         for side, (body, local) in self._points.items():
-            point = view.point_pos(body, local).numpy()
+            point = view.point_pos(body, local).cpu().numpy()
             inward = centre - point
-            poses[side] = point, palm_down(np.arctan2(inward[:, 1], inward[:, 0]))
+            yaw = np.arctan2(inward[:, 1], inward[:, 0])
+            poses[side] = point, facing(yaw) if self.plan.press else palm_down(yaw)
         return poses
 
     def act(self) -> torch.Tensor:
@@ -148,14 +185,14 @@ class TwoHandLiftExpert:
 
         close = phase == Phase.CLOSE
         closing = np.clip((self.timer - PAUSE_SECONDS) / CLOSE_SECONDS, 0.0, 1.0)
-        self.closure[close] = closing[close]
+        self.closure[close] = 0.0 if self.plan.press else closing[close]
         self._advance(close & (self.timer > PAUSE_SECONDS + CLOSE_SECONDS + SETTLE_SECONDS),
                       Phase.PULL)
 
         pull = phase == Phase.PULL
         for s in sides:
-            back = self.grip_pos[s] - self.plan.pull * self.grip_rot[s][:, :, 0]
-            target_pos[s][pull] = back[pull]
+            way = self.grip_rot[s][:, :, 2] if self.plan.press else -self.grip_rot[s][:, :, 0]
+            target_pos[s][pull] = (self.grip_pos[s] + self.plan.pull * way)[pull]
         pulled = pull & (self.timer > PULL_SECONDS)
         for s in sides:
             # Where the closed hand holds its grip point, in the hand frame.
@@ -169,7 +206,7 @@ class TwoHandLiftExpert:
         if lift.any():
             self.height[lift] = np.minimum(self.height[lift] + LIFT_SPEED * self._dt,
                                            self.plan.lift)
-            lost = lift & (tilt_deg(self.env.view.axis(*self._up)).numpy() > LOST_TILT)
+            lost = lift & (tilt_deg(self.env.view.axis(*self._up)).cpu().numpy() > LOST_TILT)
             for s in sides:
                 target_pos[s][lift] = self.grip_pos[s][lift] + self.height[lift, None] * [
                     0.0, 0.0, 1.0]

@@ -58,12 +58,27 @@ CARRY_HEIGHT = 0.12  # m above the grasp: carrying height while far from the tar
 CARRY_NEAR = 0.02  # m: horizontally this close to the target, the object goes down
 
 
+def squeezed(adapter: ActionAdapter, env: DexEnv, synergy: str, factor: float) -> str:
+    """The name of a pose closing `factor` times as far as `synergy` from `open` (clipped
+    to the actuators' ranges), added to `adapter`: position-controlled fingers told to go
+    further press harder on what stops them."""
+    if factor == 1.0:
+        return synergy
+    opened, closed = adapter.pose("open"), adapter.pose(synergy)
+    ranges = env.embodiment.ctrl_range
+    name = f"{synergy}_x{factor:g}"
+    adapter.add_pose(name, np.clip(opened + factor * (closed - opened),
+                                   ranges[:, 0], ranges[:, 1]))
+    return name
+
+
 class GraspExpert:
     """The grasp-and-move phase machine for the right hand of a single-hand env."""
 
     def __init__(self, env: DexEnv, plan: GraspPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
+        self.synergy = squeezed(self.adapter, env, plan.synergy, plan.squeeze)
         self.offset = np.asarray(env.embodiment.hand.grasp_offset) + np.asarray(plan.shift)
         objects = env.task.objects
         self.body, self.point = locate(objects, plan.obj, plan.point)
@@ -207,7 +222,7 @@ class GraspExpert:
         speed = np.where(careful, CAREFUL_SPEED, SPEED)[:, None] * self._dt
         self.pos, self.rot = step_towards(self.pos, self.rot, target_pos, target_rot,
                                           speed, TURN_RATE * self._dt)
-        command = HandCommand(self.pos, self.rot, self.closure, self.plan.synergy)
+        command = HandCommand(self.pos, self.rot, self.closure, self.synergy)
         return self.adapter.actions({self.side: command})
 
     @property

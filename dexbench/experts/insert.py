@@ -70,12 +70,12 @@ class InsertExpert:
 
     def act(self) -> torch.Tensor:
         view = self.env.view
-        head = view.point_pos(*self.head).numpy()
-        shaft = view.axis(*self.shaft).numpy()
-        inward = -view.axis(*self.bore).numpy()
-        entrance = view.point_pos(*self.entrance).numpy()
+        head = view.point_pos(*self.head).cpu().numpy()
+        shaft = view.axis(*self.shaft).cpu().numpy()
+        inward = -view.axis(*self.bore).cpu().numpy()
+        entrance = view.point_pos(*self.entrance).cpu().numpy()
         line_up = entrance - (STANDOFF * inward)
-        home = view.point_pos(*self.target).numpy() + PUSH_PAST * inward
+        home = view.point_pos(*self.target).cpu().numpy() + PUSH_PAST * inward
         angle = np.arccos(np.clip((shaft * inward).sum(axis=1), -1.0, 1.0))
         self.pushing |= ((np.linalg.norm(head - line_up, axis=1) < LINED_UP)
                          & (angle < ALIGNED))

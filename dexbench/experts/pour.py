@@ -7,6 +7,10 @@ expert turns the held hand about its palm normal, so that the rim swings over to
 the fingertips and the vessel ends up lying in the curled fingers. On the floating
 wrist that turn is the innermost hinge alone, so it never runs into the outer hinges'
 +-pi stops (a turn about the fingers, palm up, does past 90 degrees).
+
+The side grasp holds the vessel no lower in the hand than keeps the open fingers (from
+the hand's own geometry) above the table, so a broad hand (LEAP) is not stopped by the
+table short of the vessel; hands as narrow as the Shadow hand keep their plan.
 """
 
 from __future__ import annotations
@@ -17,13 +21,17 @@ import re
 import numpy as np
 import torch
 
+from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import host_ids
 from dexbench.experts.grasp import GraspExpert, Phase
 from dexbench.experts.motion import turned
-from dexbench.tasks.plans import PourPlan
+from dexbench.tasks.plans import PourPlan, locate
 
 SQUEEZE = "pour_squeeze"  # the pose name this expert adds to its own adapter
+# m the open fingers' geom bounding boxes may reach below the table top: boxes overstate
+# round fingers, and the lowest finger of a hand holding a vessel's foot rests on the table.
+PRESS = 0.03
 
 
 class PourExpert:
@@ -32,6 +40,7 @@ class PourExpert:
     def __init__(self, env: DexEnv, plan: PourPlan, side: str = "right") -> None:
         self.plan = plan
         self.grasp = GraspExpert(env, dataclasses.replace(plan.grasp, synergy=SQUEEZE), side)
+        self.grasp.offset[1] = max(self.grasp.offset[1], _table_clearance(env, plan, side))
         self._held_rot = self.grasp.grasp_rot.copy()
         self._angle = np.zeros(env.num_envs)
         self._dt = env.control_dt
@@ -71,3 +80,16 @@ class PourExpert:
         axis = self._held_rot @ np.asarray(self.plan.about)
         grasp.grasp_rot[:] = turned(axis, self._angle) @ self._held_rot
         return grasp.act()
+
+
+def _table_clearance(env: DexEnv, plan: PourPlan, side: str) -> float:
+    """The least hand-frame y of the grasp point that keeps a side grasp's open hand
+    (fingers across, thumb up: hand y points down) above the table: a hand whose fingers
+    would reach below it stops on the table, away from the vessel it should hold."""
+    info = env.task.objects[plan.grasp.obj]
+    body, point = locate(env.task.objects, plan.grasp.obj, plan.grasp.point)
+    if not plan.grasp.side or body != info.root:
+        return -np.inf
+    corners = hand_geometry(env.embodiment.hand.name, side).corners
+    below = corners[corners[:, 0] > 0.0, 1].max()  # the fingers' lowest reach
+    return float(below - PRESS - (info.rest_height + point[2]))

@@ -53,8 +53,8 @@ class PressExpert:
 
     def act(self) -> torch.Tensor:
         view = self.env.view
-        body_quat = view.body_quat(self.body).numpy()
-        point = view.point_pos(self.body, self.point).numpy()
+        body_quat = view.body_quat(self.body).cpu().numpy()
+        point = view.point_pos(self.body, self.point).cpu().numpy()
         rot = palm_down(body_yaw(body_quat) + self.plan.yaw) @ pitch_down(self.plan.pitch)
         palm_at_point = point - np.einsum("nij,nj->ni", rot, self.contact)
         hover = palm_at_point + [0.0, 0.0, HOVER]

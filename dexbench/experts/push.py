@@ -163,7 +163,7 @@ class PushExpert:
         target[down] = self.start[down]
         target[down, 2] = low + self.drop[down]
         push = self.stage == Stage.PUSH
-        actual = self.env.sim.field("site_xpos").numpy()[:, self._tips][
+        actual = self.env.sim.field("site_xpos").cpu().numpy()[:, self._tips][
             np.arange(len(self.lead)), self.lead]
         # The fingertip gives a little under load: the command runs ahead of it, a bit.
         ahead = ((actual - self.start) * self.direction).sum(axis=1)
@@ -201,8 +201,8 @@ class PushExpert:
         """Choose each env's next push: where, which way and how far."""
         view = self.env.view
         body = self.env.task.objects[self.plan.obj].root
-        pos = view.body_pos(body).numpy()[ids, :2]
-        yaw = body_yaw(view.body_quat(body).numpy()[ids])
+        pos = view.body_pos(body).cpu().numpy()[ids, :2]
+        yaw = body_yaw(view.body_quat(body).cpu().numpy()[ids])
         goal = np.asarray(self.plan.goal(self.env))[ids]
         rot, goal_rot = _rot2(yaw), _rot2(goal[:, 2])
         centre = pos + rot @ self.centroid

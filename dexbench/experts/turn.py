@@ -60,9 +60,9 @@ class TurnExpert:
 
     def act(self) -> torch.Tensor:
         view = self.env.view
-        tip = view.point_pos(self.body, self.tip).numpy()
-        pivot = view.body_pos(self._hinge_body).numpy()
-        axis = view.axis(self._hinge_body, self._hinge_axis).numpy()
+        tip = view.point_pos(self.body, self.tip).cpu().numpy()
+        pivot = view.body_pos(self._hinge_body).cpu().numpy()
+        axis = view.axis(self._hinge_body, self._hinge_axis).cpu().numpy()
         radial = tip - pivot
         radial -= (radial * axis).sum(axis=1, keepdims=True) * axis
         radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
@@ -73,9 +73,9 @@ class TurnExpert:
             rot = palm_down(yaw) @ pitch_down(np.pi / 2)
             approach = np.array([0.0, 0.0, 1.0])
         else:
-            rot = palm_down(body_yaw(view.body_quat(self.frame).numpy())) @ pitch_down(
+            rot = palm_down(body_yaw(view.body_quat(self.frame).cpu().numpy())) @ pitch_down(
                 self.plan.pitch)
-            approach = view.axis(self.frame, self.plan.approach).numpy()
+            approach = view.axis(self.frame, self.plan.approach).cpu().numpy()
         beside = tip - BESIDE * tangent
         ahead = tip + LEAD * tangent
         pads_world = np.einsum("nij,nj->ni", rot, self.pads)

@@ -8,12 +8,19 @@ from typing import ClassVar
 import mujoco
 import numpy as np
 
-from dexbench.assets import articulated
+from dexbench.assets import articulated, cutters, office
 from dexbench.assets.objects import ObjectInfo
 from dexbench.envs.dex_env import DexEnv
 from dexbench.tasks.catalog import register
-from dexbench.tasks.plans import GraspPlan, TurnPlan
-from dexbench.tasks.templates import ArticulatedTask, Placement
+from dexbench.tasks.plans import (
+    GraspPlan,
+    HoldActuatePlan,
+    PressPlan,
+    SequencePlan,
+    Step,
+    TurnPlan,
+)
+from dexbench.tasks.templates import SPEED_NOTE, ArticulatedTask, HoldActuateTask, Placement
 
 PULL_LEAD = 0.1  # m ahead of the drawer handle the hand keeps pulling towards
 
@@ -69,3 +76,97 @@ class OpenLaptop(ArticulatedTask):
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"laptop": articulated.add_laptop(spec, "laptop")}
+
+
+# Folder and stapler lie with their free edge towards the robot (yaw pi): the pushing
+# hand's fingers, pointing at the hinge and tilted down, slide under the raised edge
+# and lift it along its arc.
+FACING_ROBOT = (math.pi - 0.2, math.pi + 0.2)
+UNDER_EDGE = {"yaw": math.pi, "pitch": 0.6, "approach": (1.0, 0.0, 0.3)}
+BELOW = (0.0, 0.0, -0.018)  # the finger pads' centre, under the edge they lift
+
+
+@register
+class OpenFlatFolder(HoldActuateTask):
+    name = "OpenFlatFolder"
+    category = "articulation"
+    instruction = "Hold the folder and open its flap."
+    description = "Hold a flat folder and open its top flap around the hinge."
+    success_text = ("The flap hinge opens at least 60% of the way from its near-closed "
+                    "reset position.")
+    placements: ClassVar = {"folder": Placement((0.0, 0.0), (-0.2, 0.2), FACING_ROBOT)}
+    held, joints, threshold, reset_at = "folder", ("folder/flap",), 0.6, math.radians(10.0)
+    # The base's weight holds it down: one hand lifts the flap up and over.
+    expert = HoldActuatePlan("folder", "folder/flap", ("flap_edge", BELOW), done=0.75,
+                             **UNDER_EDGE)
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"folder": office.add_flat_folder(spec, "folder")}
+
+
+@register
+class OpenStapler(HoldActuateTask):
+    name = "OpenStapler"
+    category = "articulation"
+    instruction = "Hold the stapler and open its arm."
+    description = "Hold a stapler body and open the upper arm around its hinge."
+    success_text = "The shell hinge opens at least 20% of the way from its closed reset position."
+    placements: ClassVar = {"stapler": Placement((0.0, 0.0), (-0.2, 0.2), FACING_ROBOT)}
+    held, joints, threshold = "stapler", ("stapler/arm",), 0.2
+    # The left hand's finger tips pin the base's back end (behind the hinge) to the table.
+    # The pads go under the arm's very front, clear of the base's front face.
+    expert = HoldActuatePlan("stapler", "stapler/arm", ("arm_lip", (0.005, 0.0, -0.008)),
+                             done=0.35, **UNDER_EDGE,
+                             hold=PressPlan("stapler", ("base", (-0.08, 0.0, 0.026)),
+                                            yaw=math.pi / 2))
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"stapler": office.add_stapler(spec, "stapler")}
+
+
+@register
+class SlideUtilityKnife(HoldActuateTask):
+    name = "SlideUtilityKnife"
+    category = "articulation"
+    instruction = "Slide the utility knife's blade out and lift the knife."
+    description = "Hold a utility knife body and slide its blade out from the handle."
+    success_text = ("The blade slides out at least 40% of its travel from the retracted reset "
+                    "pose, and the whole knife is lifted at least 0.2 m off its support.")
+    placements: ClassVar = {"knife": Placement((-0.05, 0.05), (-0.15, 0.05), (0.0, 0.0))}
+    held, joints, threshold, lift_threshold = "knife", ("knife/blade",), 0.4, 0.2
+    deviations = (SPEED_NOTE,)
+    # On the table the right hand's hanging fingers push the thumb knob forward (the
+    # knife's own friction holds it: a second hand pinning the handle leaves no room and
+    # costs the time the pick-up needs), rise, and pick the knife up across its middle;
+    # the blade's friction keeps it out. Known weak: the top grasp slips off the flat
+    # 2 cm handle (see the closing note's expert table).
+    expert = SequencePlan((
+        Step(HoldActuatePlan("knife", "knife/blade", ("slider", (0.0, 0.0, 0.003)), done=0.7,
+                             release=True)),
+        Step(GraspPlan("knife", point=("grip", (0.015, 0.0, -0.01)), yaw="body",
+                       yaw_offset=math.pi / 2, shift=(0.0, 0.0, 0.008), lift=0.22,
+                       settle=0.5)),
+    ))
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"knife": cutters.add_utility_knife(spec, "knife")}
+
+
+@register
+class SqueezeScissors(HoldActuateTask):
+    name = "SqueezeScissors"
+    category = "articulation"
+    instruction = "Hold the scissors and squeeze them closed."
+    description = ("Hold and squeeze a pair of scissors so the hinge moves toward the closed "
+                   "state.")
+    success_text = "Either blade hinge closes at least 50% of the way from its reset position."
+    # Blades away from the robot, finger rings towards it.
+    placements: ClassVar = {"scissors": Placement((0.05, 0.05), (0.0, 0.0), (-0.3, 0.3))}
+    held, threshold, reset_at = "scissors", 0.5, "upper"
+    joints = ("scissors/blade0", "scissors/blade1")
+    # The left hand pins ring 1; the right hand's hanging fingers push ring 0 towards it.
+    expert = HoldActuatePlan("scissors", "scissors/blade0", "ring0", direction=-1.0,
+                             done=0.7, hold=PressPlan("scissors", "ring1", pitch=0.5))
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"scissors": cutters.add_scissors(spec, "scissors")}

@@ -6,7 +6,7 @@ from typing import ClassVar
 
 import mujoco
 
-from dexbench.assets import objects
+from dexbench.assets import kitchen, objects
 from dexbench.assets.objects import ObjectInfo
 from dexbench.tasks.catalog import register
 from dexbench.tasks.plans import TwoHandPlan
@@ -34,3 +34,23 @@ class BimanualLiftTray(LiftTask):
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"tray": objects.add_tray(spec, "tray")}
+
+
+@register
+class BimanualLiftCarton(LiftTask):
+    name = "BimanualLiftCarton"
+    category = "bimanual"
+    instruction = "Lift the carton with both hands."
+    description = "Use both hands to grasp a carton and lift it clear of the tabletop."
+    success_text = "The carton is lifted at least 0.20 m above its spawn height."
+    episode_seconds = 10.0
+    bimanual = True
+    default_embodiment = "bimanual_floating_shadow"
+    placements: ClassVar = {"carton": Placement((0.15, 0.20), (-0.10, 0.10), (0.0, 0.0))}
+    lifted, lift_threshold = "carton", 0.20
+    # Too wide for one hand and closed: the palms squeeze its long sides between them.
+    expert = TwoHandPlan("carton", {"right": "grip_yneg", "left": "grip_ypos"},
+                         shift=(0.0, 0.0, 0.02), pull=0.06, press=True)
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"carton": kitchen.add_carton(spec, "carton")}

@@ -26,15 +26,20 @@ from dexbench.tasks.predicates import tilt_deg, xy_dist
 from dexbench.tasks.templates import Placement, Stage, StageTask
 
 # MakeCoffee's expert. The carton (0.3 kg) slips out of a hand that holds it upright and
-# then turns it, so it is tipped over first: the hanging finger pads push its upper face
-# away from the mug and it falls onto its side. Lying, it is grasped from above with the
-# fingers along it, hooking over its top end, and lifted (it sags to about 65-75 deg; the
-# hand pitches down to keep it near level) with its spout over the mug's rim: the pour.
-# It is then led away from the mug and dropped. The mug is carried by its body to the
-# front of the drip tray and let go once the placement has counted; the hand backs out
-# from under the machine's head, rises above it, moves over the lever's outer side and
-# presses the lever down with its finger tips.
-TIP_AWAY = (0.0, 1.0, 0.0)  # world direction the carton is tipped over in (away from the mug)
+# then turns it, so it is tipped over first: the hanging fingers push its upper face on
+# the side opposite its spout and it falls onto its spout's side (the pour must tilt it
+# towards that side; lying on another face it could not be). A plan step has one hand
+# yaw, so the push is made with the nearest of `TIP_HEADINGS` yaws, the other yaws'
+# steps skipped. Lying, it is grasped from above with the fingers along it, hooking over
+# its top end, and lifted (it sags to about 65-75 deg; the hand pitches down to keep it
+# near level) with its spout over the mug's rim: the pour. It is then led away from the
+# mug and dropped. The mug is carried by its body to the front of the drip tray and let
+# go once the placement has counted; the hand backs out from under the machine's head,
+# rises above it, moves over the lever's outer side and presses the lever down with its
+# finger tips.
+TIP_HEADINGS = 4  # hand yaws, evenly spaced, the tipping push is made with
+TIP_CLEAR = 0.15  # m the hand rises from its start before turning its fingers down
+TIP_RISE = 0.1  # m above the push's start the finger tips come in from
 TIP_HEIGHT = 0.75  # of the spout's height: where the finger tips push the carton's face
 TIP_START = 0.04  # m short of the carton's face the finger tips start
 TIP_PUSH = 0.1  # m the finger tips push on past the face
@@ -85,13 +90,20 @@ def _along_carton(env: DexEnv) -> np.ndarray:
     return np.arctan2(up[:, 1], up[:, 0])
 
 
+def _spout_side(env: DexEnv) -> np.ndarray:
+    """(N, 3) horizontal unit vectors from the carton's axis towards its spout."""
+    side = (env.task.point(env.view, "milk", "spout") - env.view.body_pos("milk")).cpu().numpy()
+    side[:, 2] = 0.0
+    return side / np.maximum(np.linalg.norm(side, axis=1, keepdims=True), 1e-9)
+
+
 def _tip_point(env: DexEnv, lead: float) -> np.ndarray:
-    """Finger tips `lead` m past the carton's near face, high on it (`TIP_AWAY` ahead)."""
+    """Finger tips `lead` m past the carton's face opposite the spout, high on it."""
     info = env.task.objects["milk"]
     half = info.footprint_radius / math.sqrt(2)  # a square carton
     height = TIP_HEIGHT * info.points["spout"][1][2]
     home = env.view.initial_body_pos["milk"].cpu().numpy()
-    return home + (lead - half) * np.asarray(TIP_AWAY) + [0.0, 0.0, height]
+    return home + (lead - half) * _spout_side(env) + [0.0, 0.0, height]
 
 
 def _in_front_of_spout(env: DexEnv) -> np.ndarray:
@@ -127,17 +139,34 @@ def _beside_lever(env: DexEnv, start: np.ndarray) -> np.ndarray:
     return np.column_stack([(tip + LEVER_OUT * side)[:, :2], _clear_height(env)])
 
 
-def _tipped(env: DexEnv, reach) -> np.ndarray:
+def _tipped(env: DexEnv) -> np.ndarray:
     up = env.view.axis(*env.task.objects["milk"].axes["up"])
-    return reach.finished | (tilt_deg(up).cpu().numpy() > TIPPED)
+    return tilt_deg(up).cpu().numpy() > TIPPED
 
 
-_HANG = {"yaw": math.atan2(TIP_AWAY[1], TIP_AWAY[0]), "pitch": math.pi / 2}
+def _other_heading(env: DexEnv, k: int) -> np.ndarray:
+    """Heading `k` is not the one nearest the spout's side, or the carton is down: skip."""
+    side = _spout_side(env)
+    nearest = np.round(np.arctan2(side[:, 1], side[:, 0]) / (2 * math.pi) * TIP_HEADINGS)
+    return (nearest % TIP_HEADINGS != k) | _tipped(env)
+
+
+def _tip_over(k: int) -> tuple[Step, ...]:
+    """Above the push's start, down to it, and on until the carton falls: with yaw `k`."""
+    hang = {"yaw": 2 * math.pi * k / TIP_HEADINGS, "pitch": math.pi / 2}
+    rise = [0.0, 0.0, TIP_RISE]
+    return tuple(Step(ReachPlan(target, **hang),
+                      until=lambda e, r: r.finished | _other_heading(e, k))
+                 for target in (lambda e, _: _tip_point(e, -TIP_START) + rise,
+                                lambda e, _: _tip_point(e, -TIP_START),
+                                lambda e, _: _tip_point(e, TIP_PUSH)))
+
+
 COFFEE_PLAN = SequencePlan((
-    # Fingers hanging, pads towards the push: the hand stays above the carton's top.
-    Step(ReachPlan(lambda e, _: _tip_point(e, -TIP_START) + [0.0, 0.0, 0.1], **_HANG)),
-    Step(ReachPlan(lambda e, _: _tip_point(e, -TIP_START), **_HANG)),
-    Step(ReachPlan(lambda e, _: _tip_point(e, TIP_PUSH), **_HANG), until=_tipped),
+    # Up first, palm down (turning, the fingers swing down), then fingers hanging, the
+    # hand above the carton's top: it falls onto its spout's side.
+    Step(ReachPlan(lambda _, start: start + [0.0, 0.0, TIP_CLEAR])),
+    *(step for k in range(TIP_HEADINGS) for step in _tip_over(k)),
     # The tipped-over carton, fingers along it towards its top, hooking over the top's
     # end face: lifted, it hangs at 65-75 deg with its spout leading.
     Step(LevelPlan(GraspPlan("milk", point=(0.0, 0.0, 0.095), shift=(0.0, 0.0, -0.03),

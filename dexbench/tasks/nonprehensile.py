@@ -9,13 +9,13 @@ import mujoco
 import numpy as np
 import torch
 
-from dexbench.assets import objects
+from dexbench.assets import objects, ramps
 from dexbench.assets.objects import ObjectInfo
 from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.task_api import SceneView
 from dexbench.tasks.catalog import register
-from dexbench.tasks.plans import PushPlan
+from dexbench.tasks.plans import PathPushPlan, PushPlan
 from dexbench.tasks.templates import Placement, TabletopTask
 
 T_REGION = Placement((-0.41, 0.09), (-0.35, 0.15), (0.0, 2 * math.pi))
@@ -116,3 +116,96 @@ class PushT(TabletopTask):
 
     def progress(self, view: SceneView) -> torch.Tensor:
         return self.overlap(view) / self.overlap_threshold
+
+
+BALL_START = (0.04, 0.08)  # m before the ramp's foot, along its uphill axis
+BALL_SIDE = 0.03  # m either side of its centre line
+BALL_FRICTION = 0.4  # hard plastic: a fingertip pushing it slides rather than jams it
+PAST_CREST = 0.05  # m: the expert stops pushing once the ball is this far past the crest
+
+
+def _ramp_path(env: DexEnv) -> np.ndarray:
+    """(N, 2, 3) the ramp's centre line, from its foot to beyond its crest."""
+    task = env.task
+    uphill = env.view.axis(*task.objects["ramp"].axes["uphill"]).cpu().numpy()
+    foot = task.point(env.view, "ramp", "foot").cpu().numpy()
+    crest = task.point(env.view, "ramp", "target").cpu().numpy()
+    return np.stack([foot - 0.1 * uphill, crest + PAST_CREST * uphill], axis=1)
+
+
+def _over_crest(env: DexEnv) -> np.ndarray:
+    return (env.task.past(env.view) >= PAST_CREST).cpu().numpy() & env.task.success(
+        env.view).cpu().numpy()
+
+
+@register
+class PushSmallSphereObstacleSlope(TabletopTask):
+    """The ramp stands at a random pose; two obstacle pairs at two of its five slots."""
+
+    name = "PushSmallSphereObstacleSlope"
+    category = "nonprehensile"
+    instruction = "Push the small ball up the ramp, between the posts, over its top."
+    description = ("Push a small sphere uphill through randomly spawned obstacles until it "
+                   "crosses the target line.")
+    success_text = ("The sphere crosses the target line, reaching or passing both the "
+                    "target's forward position and height.")
+    deviations = ("The authors give no reset ranges beyond the obstacles: the ramp's pose "
+                  "(x 0.05..0.10, y -0.10..0.10, yaw -0.2..0.2) and the ball's start "
+                  "(4-8 cm before the ramp's foot, within 3 cm of its centre line) are ours.",
+                  f"The ball is hard plastic (friction {BALL_FRICTION}, also against the "
+                  "hand): at the default 1.0 a fingertip pushing it jams it against the "
+                  "slope instead of sliding on it.")
+    placements: ClassVar = {"ramp": Placement((0.05, 0.10), (-0.10, 0.10), (-0.2, 0.2))}
+    pairs = 2
+    expert = PathPushPlan("sphere", _ramp_path, _over_crest)
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        built = {"sphere": objects.add_sphere(spec, "sphere", radius=0.02,
+                                              friction=(BALL_FRICTION, 0.005, 0.0001)),
+                 "ramp": ramps.add_ramp(spec, "ramp")}
+        spec.geom("sphere/geom").priority = 1  # its friction, not the larger one, holds
+        for k in range(self.pairs):
+            built[f"posts{k}"] = ramps.add_obstacle_pair(spec, f"posts{k}")
+        return built
+
+    def sample_reset(self, rngs: list[np.random.Generator]):
+        sample = super().sample_reset(rngs)
+        ramp = sample.mocap_poses["ramp"]
+        yaw = 2 * np.arctan2(ramp[:, 6], ramp[:, 3])
+        rot = np.stack([np.cos(yaw), -np.sin(yaw), np.sin(yaw), np.cos(yaw)], 1).reshape(-1, 2, 2)
+        points = self.objects["ramp"].points
+
+        def world(local: np.ndarray) -> np.ndarray:
+            out = ramp[:, :3].copy()
+            out[:, :2] += np.einsum("nij,nj->ni", rot, local[:, :2])
+            out[:, 2] += local[:, 2]
+            return out
+
+        slots = np.array([r.choice(len(ramps.SLOTS), self.pairs, replace=False) for r in rngs])
+        for k in range(self.pairs):
+            local = np.array([points[f"slot{i}"][1] for i in slots[:, k]])
+            sample.mocap_poses[f"posts{k}"] = np.concatenate([world(local), ramp[:, 3:]], 1)
+        foot = np.array(points["foot"][1])
+        ball = np.array([foot - [r.uniform(*BALL_START), r.uniform(-BALL_SIDE, BALL_SIDE), 0.0]
+                         for r in rngs])
+        ball = world(ball)
+        ball[:, 2] = TABLE_TOP_Z + self.objects["sphere"].rest_height
+        sample.free_poses["sphere/free"] = np.concatenate(
+            [ball, np.tile([1.0, 0.0, 0.0, 0.0], (len(rngs), 1))], 1)
+        return sample
+
+    def past(self, view: SceneView) -> torch.Tensor:
+        """(N,) how far (m) the ball's centre is past the crest, uphill."""
+        uphill = view.axis(*self.objects["ramp"].axes["uphill"])
+        off = view.body_pos("sphere") - self.point(view, "ramp", "target")
+        return (off * uphill).sum(dim=1)
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        high = view.body_pos("sphere")[:, 2] >= self.point(view, "ramp", "target")[:, 2]
+        return (self.past(view) >= 0.0) & high
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        foot = self.point(view, "ramp", "foot")
+        crest = self.point(view, "ramp", "target")
+        run = (crest - foot)[:, :2].norm(dim=1)
+        return 1.0 + self.past(view).clamp(max=0.0) / (run + 0.1)

@@ -76,6 +76,15 @@ def task_goal(env: DexEnv) -> np.ndarray:
     return env.view.goal[:, :3].cpu().numpy()
 
 
+def object_point(obj: str, point: str, above: float = 0.0) -> EnvFn:
+    """Where object `obj`'s point `point` is now, `above` (m) higher: a target that is
+    another object (the mug a kettle pours into)."""
+    def at(env: DexEnv) -> np.ndarray:
+        pos = env.view.point_pos(*env.task.objects[obj].points[point]).cpu().numpy()
+        return pos + np.array([0.0, 0.0, above])
+    return at
+
+
 @dataclass(frozen=True)
 class GraspPlan:
     """Grasp-and-move: where and how to hold object `obj`, and where to take it.
@@ -86,7 +95,9 @@ class GraspPlan:
     tilts the fingers down from the top grasp (90 deg: hanging, palm towards the object,
     to hook a handle). `yaw` is "box" (the object's face yaw nearest to the approach),
     "body" (the object's yaw) or "none", turned further by `yaw_offset` (rad, or
-    `yaw_offset(env) -> (N,)`). `settle` (s) replaces the closed hand's default wait.
+    `yaw_offset(env) -> (N,)`). `settle` (s) replaces the closed hand's default wait;
+    the fingers close `squeeze` times as far as `synergy` (within the actuators' ranges):
+    a firmer hold on a thin or heavy-ended handle.
     After the grasp the object is lifted `lift` metres, or, with `target(env) -> (N, 3)`,
     carried until its `goal_point` is there; with `release`, the hand then opens and
     backs off (placing), as it does whenever `let_go(env) -> (N,) bool` holds while
@@ -109,6 +120,7 @@ class GraspPlan:
     let_go: EnvFn | None = None
     carry_high: bool = True
     settle: float | None = None
+    squeeze: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -168,17 +180,58 @@ class PushPlan:
 
 
 @dataclass(frozen=True)
+class PathPushPlan:
+    """Push the ball `obj` with one fingertip along the polyline `path(env) -> (N, K, 3)`
+    (a ramp's centre line, between obstacles), steering it back onto the line as it
+    strays; `done(env) -> (N,) bool`: far enough, the hand lifts off and waits."""
+
+    obj: str
+    path: EnvFn
+    done: EnvFn
+
+
+@dataclass(frozen=True)
 class TwoHandPlan:
     """Both hands hook one grip point of `obj` each (`grips`: side -> point name) and lift
     it together. `shift` moves the grip point in the right hand's frame from where the
     hand holds a 5 cm cube (mirrored for a mirrored hand); `pull` (m) is how far the
-    closed hands draw back along their fingers, `lift` (m) how high they then rise."""
+    closed hands draw back along their fingers, `lift` (m) how high they then rise.
+    With `press` (a closed box: no rim to hook) each open palm faces its grip point, a
+    side face's middle, fingers down to just above the object's base, and pushes `pull`
+    m on into it: the two pushes squeeze the object between the palms."""
 
     obj: str
     grips: Mapping[str, str]
     shift: Vec3 = (0.0, 0.0, 0.0)
     pull: float = 0.025
     lift: float = 0.27
+    press: bool = False
+
+
+@dataclass(frozen=True)
+class HoldActuatePlan:
+    """One hand (`side`) pushes point `point` of `obj` along its joint `joint`'s motion
+    (the arc of a hinge, the line of a slide) towards the joint's upper limit for
+    `direction` +1, while the other hand runs `hold` (e.g. a `PressPlan` pinning the
+    object down; None: one hand is enough). The pusher waits until the holder presses.
+    With `yaw` (rad, from `obj`'s x axis) the pushing hand is palm-down, its fingers
+    tilted down by `pitch`, coming in from `approach` (a direction in `obj`'s frame);
+    without, its fingers hang beside the point, pads facing the push. Once the joint has
+    covered `done` of its travel the hand stops there, or, with `release`, backs off to
+    where it came in from (a holding hand keeps holding); then it is finished (for a
+    `SequencePlan`)."""
+
+    obj: str
+    joint: str
+    point: PointRef
+    direction: float = 1.0
+    yaw: float | None = None
+    pitch: float = 0.0
+    approach: Vec3 = (0.0, 0.0, 1.0)
+    hold: Any = None
+    side: str = "right"
+    done: float = 1.0
+    release: bool = False
 
 
 @dataclass(frozen=True)
@@ -212,6 +265,23 @@ class PourPlan:
     squeeze: float = 1.0
     overrides: tuple[tuple[str, float], ...] = ()
     grasp_turn: float = 0.0
+
+
+@dataclass(frozen=True)
+class StrikePlan:
+    """`grasp` holds a tool (its target and goal point are the script's) and carries its
+    `face` point `hover` (m) above point `at` of object `on`; then presses the face down
+    onto it, the command `depth` (m) below it, for `press` (s), rises back and presses
+    again until `done(env) -> (N,) bool` (a nail driven home), then stays hovering."""
+
+    grasp: GraspPlan
+    face: PointRef
+    on: str
+    at: PointRef
+    done: EnvFn
+    hover: float = 0.04
+    depth: float = 0.03
+    press: float = 0.5
 
 
 @dataclass(frozen=True)

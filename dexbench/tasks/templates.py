@@ -61,7 +61,9 @@ class TabletopTask(Task):
 
     Subclasses set `placements` (object name -> Placement, in placement order) and
     `reset_joints` (articulated joint -> reset value, or "lower" / "upper" for that
-    limit), implement `make_objects`, `success` and `progress`, and give their `expert`
+    limit), and `attached` (object -> (placed object, its point): the object's root goes
+    to that point, turned like the placed object: a cup in its rack, a hammer on its
+    stand), implement `make_objects`, `success` and `progress`, and give their `expert`
     plan (`dexbench.tasks.plans`). `goal_marker` (a radius) shows a visual sphere at the
     sampled goal point; `contact_objects` are the objects whose contact forces on the
     fingertips the `contact` group reports (default: the first object, the one the
@@ -69,6 +71,7 @@ class TabletopTask(Task):
     """
 
     placements: ClassVar[dict[str, Placement]] = {}
+    attached: ClassVar[dict[str, tuple[str, str]]] = {}
     reset_joints: ClassVar[dict[str, float | str]] = {}
     goal_marker: ClassVar[float | None] = None
     contact_objects: ClassVar[tuple[str, ...] | None] = None
@@ -107,7 +110,7 @@ class TabletopTask(Task):
         self.objects = self.make_objects(spec)
         if self.goal_marker is not None:
             self.markers = {"goal": assets.add_goal_marker(spec, "goal", self.goal_marker)}
-        missing = set(self.placements) - set(self.objects)
+        missing = {*self.placements, *self.attached} - set(self.objects)
         if missing:
             raise ValueError(f"{self.name}: placements for unknown objects {missing}")
         self.initial_joints = self.resolve_joints()
@@ -141,12 +144,17 @@ class TabletopTask(Task):
             placed.append((xy, info.footprint_radius))
             z = TABLE_TOP_Z + info.rest_height + where.z
             poses[name] = np.concatenate([xy, [z], yaw_quat(rng.uniform(*where.yaw))])
+        for name, (parent, point) in self.attached.items():
+            pose, local = poses[parent], self.objects[parent].points[point][1]
+            spot = np.zeros(3)
+            mujoco.mju_rotVecQuat(spot, np.asarray(local, dtype=float), pose[3:])
+            poses[name] = np.concatenate([pose[:3] + spot, pose[3:]])
         return poses
 
     def sample_reset(self, rngs: list[np.random.Generator]) -> ResetSample:
         per_env = [self._place_one(r) for r in rngs]
         sample = ResetSample(goal=self.sample_goal(rngs))
-        for name in self.placements:
+        for name in per_env[0]:
             info = self.objects[name]
             poses = np.stack([p[name] for p in per_env])
             if info.free_joint:
@@ -321,7 +329,8 @@ class HoldActuateTask(TabletopTask):
     """A free articulated object `held` with two hands and actuated: success when `any`
     (or, with `require_all`, every one) of `joints` covers `threshold` of the travel
     reachable from `reset_at`, and, with `lift_threshold`, the object is lifted that
-    high. The paper's "fixate" tasks (stapler, folder, scissors, knife): 8 s."""
+    high (and moves slower than `MAX_SPEED`, as every lift; say so with `SPEED_NOTE`).
+    The paper's "fixate" tasks (stapler, folder, scissors, knife): 8 s."""
 
     bimanual = True
     default_embodiment = "bimanual_floating_shadow"
@@ -348,7 +357,10 @@ class HoldActuateTask(TabletopTask):
         return (self.lift(view, self.held) / self.lift_threshold).clamp(max=1.0)
 
     def success(self, view: SceneView) -> torch.Tensor:
-        return (self._joints(view) >= 1.0) & (self._lifted(view) >= 1.0)
+        lifted = self._lifted(view) >= 1.0
+        if self.lift_threshold is not None:  # like every lift: slower than `MAX_SPEED`
+            lifted &= self.slow(view, self.held)
+        return (self._joints(view) >= 1.0) & lifted
 
     def progress(self, view: SceneView) -> torch.Tensor:
         return 0.5 * self._joints(view).clamp(0.0, 1.0) + 0.5 * self._lifted(view).clamp(0.0)

@@ -1,0 +1,163 @@
+"""Hold and actuate: one hand pushes a part along its joint, the other holds the object.
+
+For free articulated objects (a folder's flap, a stapler's arm, a knife's blade slider,
+a scissor ring). The other hand runs its own plan (typically a press pinning the object
+to the table); once its finger tips are on their point, the pushing hand comes in beside
+the driven point, on the side it pushes from, and keeps its finger pads a little ahead
+of the point along the joint's motion (the arc about a hinge, the line of a slide) until
+the joint has covered the plan's `done` fraction. There it stays, or, releasing, rises
+back and levels the hand (a hanging hand is near the floating wrist's gimbal lock, bad
+for whatever step comes next). Without a hold plan the other hand moves out of the way
+(outwards and up). Contact points are measured on the hands (mean finger
+tips), so the script serves every hand and mount.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+import torch
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import (
+    ActionAdapter,
+    HandCommand,
+    palm_and_finger_sites,
+    site_pose,
+    tips_in_palm_frame,
+)
+from dexbench.experts.base import Expert, host_ids
+from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
+from dexbench.tasks.plans import HoldActuatePlan, locate
+
+SPEED = 0.4  # m/s in the air
+PUSH_SPEED = 0.1  # m/s onto the point and along the joint's motion
+TURN_RATE = 3.0  # rad/s
+HOVER = 0.08  # m back along the approach before going in beside the point
+LEAD = 0.03  # m the pads aim ahead of the point
+BESIDE = 0.025  # m the pads start from the point: behind it, or out along the approach
+ARRIVED = 0.01  # m
+HELD = 0.02  # m from the holding point to the holding hand's mean finger tip: it holds
+ASIDE = 0.12  # m an idle other hand moves outwards and up, out of the pusher's way
+LEVEL = 1e-3  # trace(R1^T R2) this close to 3: the hand has turned level
+
+
+class HoldActuateExpert:
+    """Push the plan's point along its joint with `plan.side`; the hold plan runs on the
+    other hand (`build(plan, side)` makes its expert)."""
+
+    def __init__(self, env: DexEnv, plan: HoldActuatePlan,
+                 build: Callable[[object, str], Expert]) -> None:
+        self.env, self.plan = env, plan
+        self.adapter = ActionAdapter(env)
+        model = env.scene.model
+        self._palm, self._tips = palm_and_finger_sites(env, plan.side)
+        self.body, self.local = locate(env.task.objects, plan.obj, plan.point)
+        self.root = env.task.objects[plan.obj].root
+        joint = model.joint(plan.joint)
+        self._slide = joint.type[0] == mujoco.mjtJoint.mjJNT_SLIDE
+        self._joint_body = model.body(joint.bodyid[0]).name
+        self._joint_axis, self._joint_pos = tuple(joint.axis), tuple(joint.pos)
+        self.other = next((s for s in env.embodiment.sides if s != plan.side), None)
+        self.holder = build(plan.hold, self.other) if plan.hold is not None else None
+        if self.holder is not None:
+            self._hold_at = locate(env.task.objects, plan.hold.obj, plan.hold.point)
+            tips = env.embodiment.sides[self.other].fingertip_sites
+            self._hold_tips = [model.site(t).id for t in tips]
+            self._hold_cols = [i for i, a in enumerate(env.embodiment.actuators)
+                               if a.startswith(f"{self.other}/")]
+        n = env.num_envs
+        eye = np.repeat(np.eye(3)[None], n, axis=0)
+        self.pos, self.rot, self.level = np.zeros((n, 3)), eye.copy(), eye.copy()
+        self.pads = np.zeros((n, 3))  # finger pads in the hand frame
+        self.stage = np.zeros(n, dtype=np.int64)  # hover, beside, on, push, done
+        self.away = np.zeros(n, dtype=bool)  # released: back at the hover point
+        self.aside = (np.zeros((n, 3)), eye.copy())  # where an idle other hand waits
+        if self.other is not None:
+            self._other_palm = model.site(env.embodiment.sides[self.other].palm_site).id
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = host_ids(env_ids)
+        pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
+        self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
+        self.pads[ids] = tips[ids].mean(axis=1)
+        self.stage[ids], self.away[ids] = 0, False
+        self.adapter.reset(ids)
+        if self.holder is not None:
+            self.holder.reset(env_ids)
+        elif self.other is not None:
+            pos, rot = site_pose(self.env, self._other_palm)
+            out = np.sign(pos[ids, 1:2] - self.pos[ids, 1:2]) * [0.0, ASIDE, 0.0]
+            self.aside[0][ids], self.aside[1][ids] = pos[ids] + out + [0.0, 0.0, ASIDE], rot[ids]
+
+    def _held(self) -> np.ndarray:
+        """(N,) the holding hand's finger tips are on its point (always, without one)."""
+        if self.holder is None:
+            return np.ones(self.env.num_envs, dtype=bool)
+        tips = self.env.sim.field("site_xpos").cpu().numpy()[:, self._hold_tips].mean(axis=1)
+        point = self.env.view.point_pos(*self._hold_at).cpu().numpy()
+        return np.linalg.norm(tips - point, axis=1) < HELD
+
+    def _done(self) -> np.ndarray:
+        done = self.env.task.joint_progress(self.env.view, self.plan.joint) >= self.plan.done
+        return done.cpu().numpy()
+
+    @property
+    def finished(self) -> np.ndarray:
+        if not self.plan.release:
+            return self.stage == 4
+        return self.away & (np.einsum("nij,nij->n", self.rot, self.level) > 3.0 - LEVEL)
+
+    def _motion(self, point: np.ndarray) -> np.ndarray:
+        """(N, 3) unit direction the joint moves `point` in, towards the push."""
+        view = self.env.view
+        axis = view.axis(self._joint_body, self._joint_axis).cpu().numpy()
+        if self._slide:
+            return self.plan.direction * axis
+        radial = point - view.point_pos(self._joint_body, self._joint_pos).cpu().numpy()
+        radial -= (radial * axis).sum(axis=1, keepdims=True) * axis
+        radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
+        return self.plan.direction * np.cross(axis, radial)
+
+    def act(self) -> torch.Tensor:
+        view = self.env.view
+        point = view.point_pos(self.body, self.local).cpu().numpy()
+        push = self._motion(point)
+        if self.plan.yaw is None:  # fingers hanging, pads facing the push
+            heading = palm_down(np.arctan2(-push[:, 1], -push[:, 0]))
+            rot = heading @ pitch_down(np.pi / 2)
+            approach = np.array([0.0, 0.0, 1.0])
+            beside = point - BESIDE * push
+        else:
+            heading = palm_down(body_yaw(view.body_quat(self.root).cpu().numpy()) + self.plan.yaw)
+            rot = heading @ pitch_down(self.plan.pitch)
+            approach = view.axis(self.root, self.plan.approach).cpu().numpy()
+            beside = point + BESIDE * approach / np.linalg.norm(approach, axis=1, keepdims=True)
+        goals = (beside + HOVER * approach, beside, point, point + LEAD * push)
+        pads = np.einsum("nij,nj->ni", rot, self.pads)
+        target = np.stack([goals[min(s, 3)][i] for i, s in enumerate(self.stage)]) - pads
+        arrived = np.linalg.norm(self.pos - target, axis=1) < ARRIVED
+        self.stage[arrived & (self.stage < 3) & ((self.stage > 0) | self._held())] += 1
+        self.stage[(self.stage == 3) & self._done()] = 4
+        done = self.stage == 4
+        if self.plan.release:  # up, then level: a hanging hand is near the wrist's gimbal lock
+            target[done] = (goals[0] - pads)[done]
+            up = ~self.away & done & (np.linalg.norm(self.pos - target, axis=1) < ARRIVED)
+            self.away |= up
+            self.level[up] = heading[up]
+            rot[self.away] = self.level[self.away]
+        else:
+            target[done] = self.pos[done]
+        pushing = (self.stage >= 2) & (self.stage < 4)
+        speed = np.where(pushing, PUSH_SPEED, SPEED)[:, None] * self.env.control_dt
+        self.pos, self.rot = step_towards(self.pos, self.rot, target, rot, speed,
+                                          TURN_RATE * self.env.control_dt)
+        commands = {self.plan.side: HandCommand(self.pos, self.rot, np.zeros(len(point)))}
+        if self.holder is None and self.other is not None:  # the idle hand makes room
+            commands[self.other] = HandCommand(*self.aside, np.zeros(len(point)))
+        actions = self.adapter.actions(commands)
+        if self.holder is not None:
+            actions[:, self._hold_cols] = self.holder.act()[:, self._hold_cols]
+        return actions

@@ -1,0 +1,71 @@
+"""Strike: hold a tool, bring its face over a point (a nail head) and press it down there,
+again and again, until the task says the job is done.
+
+`GraspExpert` grasps the tool and carries its face to a hover point above the target; a
+press then commands the palm straight down, a fixed `depth` past the hover height plus
+the gap, so the force on the target is the wrist's stiffness times that overshoot, not a
+run-away push. The face never leaves the tool's own contact: the hand stays on the grip.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import torch
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.base import host_ids
+from dexbench.experts.grasp import GraspExpert
+from dexbench.tasks.plans import StrikePlan, locate
+
+ARRIVED = 0.008  # m: the face this close to its hover point starts a press
+
+
+class StrikeExpert:
+    """Hover over the target, press, rise, press again until `plan.done`."""
+
+    def __init__(self, env: DexEnv, plan: StrikePlan, side: str = "right") -> None:
+        self.env, self.plan = env, plan
+        self.face = locate(env.task.objects, plan.grasp.obj, plan.face)
+        self.aim = locate(env.task.objects, plan.on, plan.at)
+        grasp = dataclasses.replace(plan.grasp, target=self._target, goal_point=plan.face)
+        self.grasp = GraspExpert(env, grasp, side)
+        n = env.num_envs
+        self.pressing = np.zeros(n, dtype=bool)
+        self.timer = np.zeros(n)
+        self.bottom = np.zeros((n, 3))  # where the palm is commanded during a press
+
+    def _points(self) -> tuple[np.ndarray, np.ndarray]:
+        view = self.env.view
+        return view.point_pos(*self.face).cpu().numpy(), view.point_pos(*self.aim).cpu().numpy()
+
+    def _target(self, env: DexEnv) -> np.ndarray:
+        """Where the face goes: above the aim, or, pressing, wherever puts the palm
+        command at `bottom` (the carry moves the palm by the face's error)."""
+        face, aim = self._points()
+        hover = aim + [0.0, 0.0, self.plan.hover]
+        press = face + self.bottom - self.grasp.pos
+        return np.where(self.pressing[:, None], press, hover)
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        ids = host_ids(env_ids)
+        self.pressing[ids], self.timer[ids] = False, 0.0
+        self.grasp.reset(env_ids)
+
+    def act(self) -> torch.Tensor:
+        face, aim = self._points()
+        carrying = self.grasp.carrying
+        done = np.asarray(self.plan.done(self.env))
+        above = np.linalg.norm(face - aim - [0.0, 0.0, self.plan.hover], axis=1) < ARRIVED
+        start = carrying & above & ~self.pressing & ~done
+        drop = [0.0, 0.0, self.plan.hover + self.plan.depth]
+        self.bottom[start] = (self.grasp.pos - drop)[start]
+        self.pressing |= start
+        self.timer = np.where(self.pressing, self.timer + self.env.control_dt, 0.0)
+        self.pressing &= carrying & (self.timer < self.plan.press) & ~done
+        return self.grasp.act()
+
+    @property
+    def finished(self) -> np.ndarray:
+        return np.asarray(self.plan.done(self.env)) & ~self.pressing

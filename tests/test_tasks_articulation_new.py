@@ -1,0 +1,96 @@
+"""The "fixate" hold-and-actuate tasks (folder, stapler, utility knife, scissors): a state
+that satisfies each paper condition and, for every clause, a near miss that does not."""
+
+import functools
+
+import pytest
+import torch
+
+from dexbench.experts import make_expert
+from dexbench.tasks.registry import make_env
+
+
+@functools.cache
+def _env(name: str):
+    env = make_env(name, num_envs=1, seed=0)
+    env.reset()
+    return env
+
+
+def _fresh(name: str):
+    env = _env(name)
+    env.reset()
+    return env
+
+
+def _set_progress(env, joint: str, fraction: float) -> None:
+    """Move `joint` `fraction` of the travel reachable from its reset value."""
+    lo, hi = env.task.joint_range(joint)
+    q0 = env.task.initial_joints[joint]
+    sign = 1.0 if hi - q0 >= q0 - lo else -1.0
+    adr = env.scene.model.joint(joint).qposadr[0]
+    env.sim.field("qpos")[0, adr] = q0 + sign * fraction * max(q0 - lo, hi - q0)
+
+
+def _ok(env) -> bool:
+    env.sim.forward(torch.arange(env.num_envs))
+    return bool(env.task.success(env.view)[0])
+
+
+@pytest.mark.parametrize(("name", "joint", "threshold"), [
+    ("OpenFlatFolder", "folder/flap", 0.6),
+    ("OpenStapler", "stapler/arm", 0.2),
+])
+def test_hinge_opens_past_the_threshold_from_its_reset(name, joint, threshold):
+    env = _fresh(name)
+    assert not _ok(env), "solved at reset"
+    _set_progress(env, joint, threshold + 0.02)
+    assert _ok(env)
+    _set_progress(env, joint, threshold - 0.02)
+    assert not _ok(env)
+
+
+def test_scissors_either_blade_closing_half_way():
+    env = _fresh("SqueezeScissors")
+    q0 = {j: env.task.initial_joints[j] for j in ("scissors/blade0", "scissors/blade1")}
+    assert q0 == {j: env.task.joint_range(j)[1] for j in q0}, "reset wide open"
+    for closed in q0:
+        for joint in q0:
+            _set_progress(env, joint, 0.52 if joint == closed else 0.0)
+        assert _ok(env), closed
+    for joint in q0:
+        _set_progress(env, joint, 0.48)
+    assert not _ok(env), "neither blade half closed"
+
+
+def test_knife_needs_the_blade_out_and_the_knife_lifted_slowly():
+    env = _fresh("SlideUtilityKnife")
+    model, qpos = env.scene.model, env.sim.field("qpos")
+    free = model.joint(env.task.objects["knife"].free_joint)
+    z0 = float(qpos[0, free.qposadr[0] + 2])
+
+    def state(blade: float, lift: float, speed: float = 0.0) -> bool:
+        _set_progress(env, "knife/blade", blade)
+        qpos[0, free.qposadr[0] + 2] = z0 + lift
+        env.sim.field("qvel")[0, free.dofadr[0] + 2] = speed
+        return _ok(env)
+
+    assert state(0.42, 0.21)
+    assert not state(0.38, 0.21), "blade out less than 40%"
+    assert not state(0.42, 0.19), "lifted less than 0.2 m"
+    assert not state(0.42, 0.21, speed=0.6), "thrown, not held"
+
+
+def test_hold_actuate_expert_pins_one_ring_and_pushes_the_other():
+    env = make_env("SqueezeScissors", num_envs=2, seed=1)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(2))
+    solved = torch.zeros(2, dtype=torch.bool)
+    for _ in range(200):  # the expert needs ~130 of the 480 steps
+        _, _, terminated, _, _ = env.step(expert.act())
+        solved |= terminated
+        if solved.all():
+            break
+    assert solved.all()
+    assert expert.holder.pressing.all(), "the left hand holds ring 1 down"
