@@ -107,8 +107,8 @@ class GraspExpert:
         view = self.env.view
         pos = view.body_pos(body)
         quat = view.body_quat(body)
-        offset = torch.as_tensor(local, dtype=pos.dtype).expand(pos.shape)
-        return (pos + quat_apply(quat, offset)).numpy(), quat.numpy()
+        offset = torch.as_tensor(local, dtype=pos.dtype, device=pos.device).expand(pos.shape)
+        return (pos + quat_apply(quat, offset)).cpu().numpy(), quat.cpu().numpy()
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
