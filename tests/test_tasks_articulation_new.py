@@ -1,26 +1,12 @@
 """The "fixate" hold-and-actuate tasks (folder, stapler, utility knife, scissors): a state
 that satisfies each paper condition and, for every clause, a near miss that does not."""
 
-import functools
-
 import pytest
 import torch
+from test_tasks import _fresh
 
 from dexbench.experts import make_expert
 from dexbench.tasks.registry import make_env
-
-
-@functools.cache
-def _env(name: str):
-    env = make_env(name, num_envs=1, seed=0)
-    env.reset()
-    return env
-
-
-def _fresh(name: str):
-    env = _env(name)
-    env.reset()
-    return env
 
 
 def _set_progress(env, joint: str, fraction: float) -> None:
