@@ -119,6 +119,28 @@ def test_capacity_overflow_is_counted_per_world():
     assert int(sim.warning_counts()[0]) == 0
 
 
+def test_a_diverged_world_is_reset_and_counted_as_on_the_cpu():
+    """MuJoCo's auto-reset: a world whose state went non-finite or huge is put back to the
+    model's defaults within the step (one warning); the other worlds go on untouched."""
+    env = _env("PickCube", "warp")
+    model, sim = env.scene.model, env.sim
+    # 1e12 is beyond MuJoCo's mjMAXVAL; such a velocity also overflows mujoco_warp's
+    # constraint rows for the step, which counts in every world: only NaN leaves world 0
+    # without a warning.
+    for bad, others_clean in ((float("nan"), True), (1e12, False)):
+        env.reset()
+        settled = sim.field("qpos").double().cpu().numpy().copy()
+        sim.field("qvel")[1, 0] = bad
+        sim.step(2)
+        qpos = sim.field("qpos").double().cpu().numpy()
+        assert int(sim.warning_counts()[1]) == 1
+        assert np.isfinite(sim.field("xpos").cpu().numpy()).all()
+        np.testing.assert_allclose(qpos[1], model.qpos0, atol=1e-6)
+        np.testing.assert_allclose(qpos[0], settled[0], atol=0.01)  # world 0 stepped on
+        if others_clean:
+            assert int(sim.warning_counts()[0]) == 0
+
+
 @pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU")
 @pytest.mark.parametrize("camera", [False, True])
 def test_gpu_step_never_waits_for_the_gpu_after_checking_actions(camera, monkeypatch):

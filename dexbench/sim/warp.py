@@ -17,7 +17,9 @@ stage when asked for.
 Contact and constraint capacity is sized from the model (`capacity`); mujoco_warp flags
 overflows per world, and each control step with a capacity overflow or a non-finite
 state counts as one warning of that world (`warning_counts`), like MuJoCo's warnings
-on the CPU backend.
+on the CPU backend. Like MuJoCo on the CPU (its auto-reset), a world whose state went
+non-finite or beyond `MAX_STATE_VALUE` is reset to the model's defaults in the same step,
+so a diverged world never hands NaN to observations or policies.
 """
 
 from __future__ import annotations
@@ -43,22 +45,25 @@ _CAPACITY_OVERFLOWS = int(mjw.OverflowType.ALL & ~(mjw.OverflowType.ITERATIONS
 _DERIVED_CONSTANTS = ("body_subtreemass", "body_invweight0", "dof_invweight0",
                       "tendon_invweight0", "actuator_acc0")
 CAPACITY_MARGIN = 2.0
+MAX_STATE_VALUE = 1e10  # MuJoCo's mjMAXVAL: larger positions or velocities are divergence
 
 
 @wp.kernel
-def _count_warnings(mask: int, qpos: wp.array2d(dtype=wp.float32),
+def _count_warnings(mask: int, max_value: float, qpos: wp.array2d(dtype=wp.float32),
                     qvel: wp.array2d(dtype=wp.float32), overflow: wp.array(dtype=wp.int32),
-                    counts: wp.array(dtype=wp.int32)):
-    """Count a world's control step as a warning if it overflowed or went non-finite."""
+                    counts: wp.array(dtype=wp.int32), diverged: wp.array(dtype=bool)):
+    """Count a world's control step as a warning if it overflowed or diverged (a
+    non-finite or huge state, which also marks the world for MuJoCo's auto-reset)."""
     world = wp.tid()
-    bad = (overflow[world] & mask) != 0
+    bad = wp.int32(0)  # a dynamic variable: warp forbids mutating a constant in a loop
     for i in range(qpos.shape[1]):
-        if not wp.isfinite(qpos[world, i]):
-            bad = True
+        if not (wp.abs(qpos[world, i]) <= max_value):  # NaN fails every comparison
+            bad = 1
     for i in range(qvel.shape[1]):
-        if not wp.isfinite(qvel[world, i]):
-            bad = True
-    if bad:
+        if not (wp.abs(qvel[world, i]) <= max_value):
+            bad = 1
+    diverged[world] = bad != 0
+    if bad != 0 or (overflow[world] & mask) != 0:
         counts[world] = counts[world] + 1
     overflow[world] = overflow[world] & ~mask
 
@@ -203,10 +208,11 @@ class WarpBackend:
         mjw.step2(self.m, self.d)  # the position/velocity stages are current already
         for _ in range(nsubsteps - 1):
             mjw.step(self.m, self.d)
-        self._forward(acceleration)
         wp.launch(_count_warnings, dim=self.num_envs,
-                  inputs=[_CAPACITY_OVERFLOWS, self.d.qpos, self.d.qvel, self.d.overflow,
-                          self._warnings])
+                  inputs=[_CAPACITY_OVERFLOWS, MAX_STATE_VALUE, self.d.qpos, self.d.qvel,
+                          self.d.overflow, self._warnings, self._reset_mask])
+        mjw.reset_data(self.m, self.d, self._reset_mask)  # the diverged worlds only
+        self._forward(acceleration)
 
     def step(self, nsubsteps: int, acceleration: bool = False) -> None:
         if nsubsteps < 1:
