@@ -13,6 +13,7 @@ each failure's message.
 
 import http.server
 import json
+import math
 import pathlib
 import threading
 import traceback
@@ -32,6 +33,7 @@ from websockets.sync.server import serve
 from dexbench import make_env
 from dexbench.cli import eval as eval_cli
 from dexbench.cli.eval import EvalError
+from dexbench.eval.throughput import WARMUP_STEPS
 from dexbench.policies.vla_adapters import json_numpy as our_json
 from dexbench.policies.vla_adapters import msgpack_numpy as our_msgpack
 from dexbench.policies.vla_adapters import openpi, openvla_oft
@@ -314,8 +316,11 @@ def test_openpi_eval_throughput_benchmark_needs_no_checkpoint(server):
         f"policy.image_size={SIZE}", "num_envs=2", "episodes=2", "sequential_episodes=1",
         "horizon=5", f"camera.width={SIZE}", f"camera.height={SIZE}", "progress=false"])
     assert result["policy"] == "openpi" and result["checkpoint"] is None
-    # one untimed warm-up query per env, then one per 5-step episode: (2 + 2) + (1 + 1)
-    assert result["batched_eps_per_min"] > 0 and len(server.requests) == 6
+    # untimed warm-up steps re-query every 10 (replan_steps), then one query per 5-step
+    # episode: batched 2 envs x (warm-up + 1), sequential 1 env x (warm-up + 1)
+    warmup = math.ceil(WARMUP_STEPS / 10)
+    assert result["batched_eps_per_min"] > 0
+    assert len(server.requests) == 2 * (warmup + 1) + (warmup + 1)
 
 
 @pytest.mark.parametrize("model, message", [
