@@ -43,6 +43,11 @@ class HandSpec:
     closes to `power` and lifts; `tests/test_embodiments.py` checks that this lifts a
     0.1 kg cube for every hand. Experts use it as the pre-grasp target.
     """
+    bar_yaw: float = 0.0
+    """How far (rad, about the palm normal) a bar handle held palm-down across the palm
+    best turns from square to the fingers, for `power` to hold it against a heavy end's
+    twist: the fingers' lengths and spread differ per hand, so the line they wrap firmest
+    does too. Searched on GraspPan's handle (0.1 rad steps); 0: not searched."""
 
 
 def _shadow_side(p: str) -> HandSide:
@@ -126,6 +131,19 @@ HANDS: dict[str, HandSpec] = {
                 r"A_THJ2$": 0.5,
                 r"A_THJ1$": 0.5,
             },
+            # Thumb and index tips meet under the palm, the other fingers stay straight
+            # (clear of the table); the targets pass the meeting point, so the weak
+            # fingers press on a thin object between the tips (`PinchPlan`). Every hand's
+            # `tip_pinch` closes thumb and index only; the other hands' are first guesses
+            # (their `pinch` without the other fingers), not yet tuned.
+            "tip_pinch": {
+                r"A_FFJ3$": 1.5,
+                r"A_FFJ0$": 0.9,
+                r"A_THJ5$": 0.5,
+                r"A_THJ4$": 1.22,
+                r"A_THJ2$": 0.35,
+                r"A_THJ1$": 0.3,
+            },
         },
     ),
     "allegro": HandSpec(
@@ -159,6 +177,13 @@ HANDS: dict[str, HandSpec] = {
                 r"ffa[23]$": 0.6,
                 r"(mf|rf)a1$": 1.5,
                 r"(mf|rf)a[23]$": 1.5,
+                r"tha0$": 1.3,
+                r"tha1$": 0.7,
+                r"tha[23]$": 0.6,
+            },
+            "tip_pinch": {
+                r"ffa1$": 1.0,
+                r"ffa[23]$": 0.6,
                 r"tha0$": 1.3,
                 r"tha1$": 0.7,
                 r"tha[23]$": 0.6,
@@ -207,11 +232,20 @@ HANDS: dict[str, HandSpec] = {
                 r"th_mcp_act$": 0.3,
                 r"th_ipl_act$": 0.5,
             },
+            "tip_pinch": {
+                r"if_mcp_act$": 1.0,
+                r"if_(pip|dip)_act$": 0.6,
+                r"th_cmc_act$": 1.3,
+                r"th_axl_act$": 1.5,
+                r"th_mcp_act$": 0.3,
+                r"th_ipl_act$": 0.5,
+            },
         },
     ),
     "sharpa": HandSpec(
         name="sharpa",
         grasp_offset=(0.097, -0.001, 0.0675),
+        bar_yaw=-0.4,
         collection="sharpa_wave",
         sides={"right": _sharpa_side("right"), "left": _sharpa_side("left")},
         synergies={
@@ -234,11 +268,20 @@ HANDS: dict[str, HandSpec] = {
                 r"_thumb_MCP_FE_ctrl$": 0.4,
                 r"_thumb_IP_ctrl$": 0.4,
             },
+            "tip_pinch": {
+                r"_index_MCP_FE_ctrl$": 0.9,
+                r"_index_(PIP|DIP)_ctrl$": 0.6,
+                r"_thumb_CMC_FE_ctrl$": 1.3,
+                r"_thumb_CMC_AA_ctrl$": 0.3,
+                r"_thumb_MCP_FE_ctrl$": 0.4,
+                r"_thumb_IP_ctrl$": 0.4,
+            },
         },
     ),
     "inspire": HandSpec(
         name="inspire",
         grasp_offset=(0.108, -0.015, 0.049),
+        bar_yaw=0.4,
         collection="inspire_hand",
         sides={"right": _inspire_side("right"), "left": _inspire_side("left")},
         synergies={
@@ -254,6 +297,12 @@ HANDS: dict[str, HandSpec] = {
                 r"index_proximal_drive$": 0.9,
                 r"index_distal_drive$": 0.9,
                 r"(middle|ring|pinky)_(proximal|distal)_drive$": 1.6,
+                r"thumb_proximal_1_drive$": 1.3,
+                r"thumb_(proximal_2|middle|distal)_drive$": 0.4,
+            },
+            "tip_pinch": {
+                r"index_proximal_drive$": 0.9,
+                r"index_distal_drive$": 0.9,
                 r"thumb_proximal_1_drive$": 1.3,
                 r"thumb_(proximal_2|middle|distal)_drive$": 0.4,
             },
@@ -285,9 +334,16 @@ HANDS: dict[str, HandSpec] = {
                 r"finger1_joint2_actuator$": 0.6,
                 r"finger1_joint[34]_actuator$": 0.4,
             },
+            "tip_pinch": {
+                r"finger2_joint1_actuator$": 0.9,
+                r"finger2_joint[34]_actuator$": 0.6,
+                r"finger1_joint1_actuator$": 1.3,
+                r"finger1_joint2_actuator$": 0.6,
+                r"finger1_joint[34]_actuator$": 0.4,
+            },
         },
     ),
 }
 
 # `hook` is derived for every hand (power fingers, open thumb), not declared in HandSpec.
-SYNERGIES = ("open", "power", "pinch", "hook")
+SYNERGIES = ("open", "power", "pinch", "tip_pinch", "hook")

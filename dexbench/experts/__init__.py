@@ -16,6 +16,7 @@ from dexbench.experts.grasp import GraspExpert, LevelGraspExpert
 from dexbench.experts.hold_actuate import HoldActuateExpert
 from dexbench.experts.insert import InsertExpert
 from dexbench.experts.path_push import PathPushExpert
+from dexbench.experts.pinch import PinchExpert
 from dexbench.experts.pour import PourExpert
 from dexbench.experts.press import PressExpert
 from dexbench.experts.push import PushExpert
@@ -36,6 +37,7 @@ KINDS: dict[type, Any] = {
     plans.TwoHandPlan: TwoHandLiftExpert,
     plans.InsertPlan: InsertExpert,
     plans.PourPlan: PourExpert,
+    plans.PinchPlan: PinchExpert,
     plans.ReachPlan: ReachExpert,
     plans.StackLiftPlan: StackLiftExpert,
     plans.StrikePlan: StrikeExpert,

@@ -11,9 +11,11 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+import mujoco
 import numpy as np
 import torch
 
+from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.rotations import quat_apply
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
@@ -72,6 +74,69 @@ def squeezed(adapter: ActionAdapter, env: DexEnv, synergy: str, factor: float) -
     return name
 
 
+def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
+    """The ids of body `root` and of every body below it."""
+    out = {root}
+    for body in range(root + 1, model.nbody):
+        if model.body_parentid[body] in out:
+            out.add(body)
+    return out
+
+
+def stand_off(expert: GraspExpert, distance: float, reach: float = 0.04) -> float:
+    """How far (m) `expert`'s grasp pose must move back along the palm normal (negative:
+    in) for the open hand there to stand `distance` clear of the object (negative: pressed
+    into it): the hand's own size, not the plan's, then sets how close its palm comes, so
+    a thick palm or an open thumb standing off the palm does not push the object over on
+    its way in, and a handle rests in the fingers' hook alike for every hand. Measured
+    once, between the open hand (its settled `open` joints) and the object placed at the
+    grasp in a scratch copy of the scene, at most `reach` either way (2 mm steps);
+    objects not free to move give 0."""
+    env, side = expert.env, expert.side
+    info = env.task.objects[expert.plan.obj]
+    if info.free_joint is None:
+        return 0.0
+    model = env.scene.model
+    data = mujoco.MjData(model)
+    layout = env.embodiment.sides[side]
+    prefix = layout.hand_root.removesuffix(env.embodiment.hand.sides[side].palm_body)
+    for joint, q in hand_geometry(env.embodiment.hand.name, side).open_qpos.items():
+        if prefix + joint in layout.hand_joints:
+            data.qpos[model.joint(prefix + joint).qposadr[0]] = q
+    mujoco.mj_kinematics(model, data)
+    palm = model.site(layout.palm_site).id
+    palm_pos, palm_rot = data.site_xpos[palm].copy(), data.site_xmat[palm].reshape(3, 3).copy()
+    # The grasp planned on the object upright at the origin, into slot 0 (every slot is
+    # planned afresh on its first approach).
+    body = model.body(expert.body).id
+    free = model.joint(info.free_joint).qposadr[0]
+    data.qpos[free:free + 7] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    mujoco.mj_kinematics(model, data)
+    point = data.xpos[body] + data.xmat[body].reshape(3, 3) @ np.asarray(expert.point)
+    n = env.num_envs
+    expert._plan_grasp(np.array([0]), np.repeat(point[None], n, axis=0),
+                       np.repeat(data.xquat[body][None], n, axis=0))
+    grasp_pos, grasp_rot = expert.grasp_pos[0], expert.grasp_rot[0]
+    colliding = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
+    hand = _subtree(model, model.body(layout.hand_root).id)
+    held = _subtree(model, model.body(info.root).id)
+    pairs = [(a, b) for a in np.flatnonzero(colliding & np.isin(model.geom_bodyid, list(hand)))
+             for b in np.flatnonzero(colliding & np.isin(model.geom_bodyid, list(held)))]
+    # Move the object, not the hand: the palm stays at home, the object goes where the
+    # grasp pose (moved back by `back`) puts it relative to the palm.
+    turn = palm_rot @ grasp_rot.T
+    mujoco.mju_mat2Quat(data.qpos[free + 3:free + 7], turn.ravel())
+    fromto = np.zeros(6)
+    for back in np.arange(-reach, reach, 0.002):
+        data.qpos[free:free + 3] = palm_pos - turn @ (grasp_pos - back * grasp_rot[:, 2])
+        mujoco.mj_kinematics(model, data)
+        gap = min(mujoco.mj_geomDistance(model, data, a, b, distance + 0.01, fromto)
+                  for a, b in pairs)
+        if gap >= distance:
+            return float(back)
+    return 0.0
+
+
 class GraspExpert:
     """The grasp-and-move phase machine for the right hand of a single-hand env."""
 
@@ -98,6 +163,8 @@ class GraspExpert:
         self.placed = np.zeros(n, dtype=bool)
         self.held = np.zeros((n, 3))
         self.travel_z = np.zeros(n)
+        if plan.standoff is not None:
+            self.offset[2] += stand_off(self, plan.standoff)
 
     def _palm(self) -> tuple[np.ndarray, np.ndarray]:
         return site_pose(self.env, self._palm_site)

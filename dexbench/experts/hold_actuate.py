@@ -8,7 +8,9 @@ of the point along the joint's motion (the arc about a hinge, the line of a slid
 the joint has covered the plan's `done` fraction. There it stays, or, releasing, rises
 back and levels the hand (a hanging hand is near the floating wrist's gimbal lock, bad
 for whatever step comes next). Without a hold plan the other hand moves out of the way
-(outwards and up). Contact points are measured on the hands (mean finger
+(outwards and up), or, with a `then` plan (picking the object up once its part has
+moved), waits outwards of and above that plan's point and runs it once the joint is
+done and a releasing pusher has backed off. Contact points are measured on the hands (mean finger
 tips), so the script serves every hand and mount.
 """
 
@@ -41,6 +43,8 @@ BESIDE = 0.025  # m the pads start from the point: behind it, or out along the a
 ARRIVED = 0.01  # m
 HELD = 0.02  # m from the holding point to the holding hand's mean finger tip: it holds
 ASIDE = 0.12  # m an idle other hand moves outwards and up, out of the pusher's way
+WAIT_OUT, WAIT_UP = 0.16, 0.12  # m outwards of and above its point the `then` hand waits
+UP = np.array([0.0, 0.0, 1.0])
 LEVEL = 1e-3  # trace(R1^T R2) this close to 3: the hand has turned level
 
 
@@ -62,18 +66,22 @@ class HoldActuateExpert:
         self._joint_axis, self._joint_pos = tuple(joint.axis), tuple(joint.pos)
         self.other = next((s for s in env.embodiment.sides if s != plan.side), None)
         self.holder = build(plan.hold, self.other) if plan.hold is not None else None
+        self.after = build(plan.then, self.other) if plan.then is not None else None
+        if self.after is not None:
+            self._then_at = locate(env.task.objects, plan.then.obj, plan.then.point)
+        self._other_cols = [i for i, a in enumerate(env.embodiment.actuators)
+                            if a.startswith(f"{self.other}/")]
         if self.holder is not None:
             self._hold_at = locate(env.task.objects, plan.hold.obj, plan.hold.point)
             tips = env.embodiment.sides[self.other].fingertip_sites
             self._hold_tips = [model.site(t).id for t in tips]
-            self._hold_cols = [i for i, a in enumerate(env.embodiment.actuators)
-                               if a.startswith(f"{self.other}/")]
         n = env.num_envs
         eye = np.repeat(np.eye(3)[None], n, axis=0)
         self.pos, self.rot, self.level = np.zeros((n, 3)), eye.copy(), eye.copy()
         self.pads = np.zeros((n, 3))  # finger pads in the hand frame
         self.stage = np.zeros(n, dtype=np.int64)  # hover, beside, on, push, done
         self.away = np.zeros(n, dtype=bool)  # released: back at the hover point
+        self.started = np.zeros(n, dtype=bool)  # the other hand runs `then`
         self.aside = (np.zeros((n, 3)), eye.copy())  # where an idle other hand waits
         if self.other is not None:
             self._other_palm = model.site(env.embodiment.sides[self.other].palm_site).id
@@ -83,14 +91,17 @@ class HoldActuateExpert:
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pads[ids] = tips[ids].mean(axis=1)
-        self.stage[ids], self.away[ids] = 0, False
+        self.stage[ids], self.away[ids], self.started[ids] = 0, False, False
         self.adapter.reset(ids)
         if self.holder is not None:
             self.holder.reset(env_ids)
         elif self.other is not None:
             pos, rot = site_pose(self.env, self._other_palm)
-            out = np.sign(pos[ids, 1:2] - self.pos[ids, 1:2]) * [0.0, ASIDE, 0.0]
-            self.aside[0][ids], self.aside[1][ids] = pos[ids] + out + [0.0, 0.0, ASIDE], rot[ids]
+            out = np.sign(pos[ids, 1:2] - self.pos[ids, 1:2]) * [0.0, 1.0, 0.0]
+            self.aside[0][ids], self.aside[1][ids] = pos[ids] + ASIDE * (out + UP), rot[ids]
+            if self.after is not None:  # nearer: outwards of and above where it starts
+                then = self.env.view.point_pos(*self._then_at).cpu().numpy()
+                self.aside[0][ids] = then[ids] + WAIT_OUT * out + WAIT_UP * UP
 
     def _held(self) -> np.ndarray:
         """(N,) the holding hand's finger tips are on its point (always, without one)."""
@@ -106,6 +117,8 @@ class HoldActuateExpert:
 
     @property
     def finished(self) -> np.ndarray:
+        if self.after is not None:
+            return self.started & np.asarray(self.after.finished)
         if not self.plan.release:
             return self.stage == 4
         return self.away & (np.einsum("nij,nij->n", self.rot, self.level) > 3.0 - LEVEL)
@@ -159,5 +172,13 @@ class HoldActuateExpert:
             commands[self.other] = HandCommand(*self.aside, np.zeros(len(point)))
         actions = self.adapter.actions(commands)
         if self.holder is not None:
-            actions[:, self._hold_cols] = self.holder.act()[:, self._hold_cols]
+            actions[:, self._other_cols] = self.holder.act()[:, self._other_cols]
+        if self.after is not None:  # once the joint is done and a releasing pusher clear
+            start = (self.away if self.plan.release else done) & ~self.started
+            if start.any():
+                self.after.reset(torch.as_tensor(np.flatnonzero(start)))
+                self.started |= start
+            if self.started.any():
+                rows = torch.as_tensor(np.flatnonzero(self.started))[:, None]
+                actions[rows, self._other_cols] = self.after.act()[rows, self._other_cols]
         return actions

@@ -16,6 +16,7 @@ import torch
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids
+from dexbench.experts.grasp import squeezed
 from dexbench.experts.motion import step_towards, turned
 from dexbench.tasks.plans import InsertPlan
 
@@ -38,6 +39,7 @@ class InsertExpert:
     def __init__(self, env: DexEnv, plan: InsertPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
+        self.pose = squeezed(self.adapter, env, plan.synergy, plan.squeeze)
         peg, hole = env.task.objects[plan.peg], env.task.objects[plan.hole]
         self.head, self.shaft = peg.points[plan.head], peg.axes[plan.shaft]
         self.entrance, self.target = hole.points[plan.entrance], hole.points[plan.target]
@@ -96,4 +98,5 @@ class InsertExpert:
         self.pos, self.rot = step_towards(self.pos, self.rot, target_pos, target_rot, speed,
                                           TURN_RATE * self.env.control_dt)
         closure = np.ones(self.env.num_envs)
-        return self.adapter.actions({self.side: HandCommand(self.pos, self.rot, closure)})
+        command = HandCommand(self.pos, self.rot, closure, self.pose)
+        return self.adapter.actions({self.side: command})

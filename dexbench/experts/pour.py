@@ -24,7 +24,7 @@ import torch
 from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import host_ids
-from dexbench.experts.grasp import GraspExpert, Phase
+from dexbench.experts.grasp import GraspExpert, Phase, stand_off
 from dexbench.experts.motion import turned
 from dexbench.tasks.plans import PourPlan, locate
 
@@ -39,8 +39,11 @@ class PourExpert:
 
     def __init__(self, env: DexEnv, plan: PourPlan, side: str = "right") -> None:
         self.plan = plan
-        self.grasp = GraspExpert(env, dataclasses.replace(plan.grasp, synergy=SQUEEZE), side)
+        self.grasp = GraspExpert(env, dataclasses.replace(plan.grasp, synergy=SQUEEZE,
+                                                          standoff=None), side)
         self.grasp.offset[1] = max(self.grasp.offset[1], _table_clearance(env, plan, side))
+        if plan.grasp.standoff is not None:  # from where the hand clears the table
+            self.grasp.offset[2] += stand_off(self.grasp, plan.grasp.standoff)
         self._held_rot = self.grasp.grasp_rot.copy()
         self._angle = np.zeros(env.num_envs)
         self._dt = env.control_dt

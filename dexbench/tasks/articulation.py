@@ -15,9 +15,8 @@ from dexbench.tasks.catalog import register
 from dexbench.tasks.plans import (
     GraspPlan,
     HoldActuatePlan,
+    PinchPlan,
     PressPlan,
-    SequencePlan,
-    Step,
     TurnPlan,
 )
 from dexbench.tasks.templates import SPEED_NOTE, ArticulatedTask, HoldActuateTask, Placement
@@ -135,18 +134,17 @@ class SlideUtilityKnife(HoldActuateTask):
     placements: ClassVar = {"knife": Placement((-0.05, 0.05), (-0.15, 0.05), (0.0, 0.0))}
     held, joints, threshold, lift_threshold = "knife", ("knife/blade",), 0.4, 0.2
     deviations = (SPEED_NOTE,)
-    # On the table the right hand's hanging fingers push the thumb knob forward (the
-    # knife's own friction holds it: a second hand pinning the handle leaves no room and
-    # costs the time the pick-up needs), rise, and pick the knife up across its middle;
-    # the blade's friction keeps it out. Known weak: the top grasp slips off the flat
-    # 2 cm handle (see the closing note's expert table).
-    expert = SequencePlan((
-        Step(HoldActuatePlan("knife", "knife/blade", ("slider", (0.0, 0.0, 0.003)), done=0.7,
-                             release=True)),
-        Step(GraspPlan("knife", point=("grip", (0.015, 0.0, -0.01)), yaw="body",
-                       yaw_offset=math.pi / 2, shift=(0.0, 0.0, 0.008), lift=0.22,
-                       settle=0.5)),
-    ))
+    # On the table the right hand's palm, fingers tilted down, pushes the thumb knob
+    # forward (the knife's own friction holds it; aiming 12 mm off its centre line meets
+    # it with a finger, not a gap between two) and backs off; the left hand, waiting
+    # beside, then pinches the handle's rear half between thumb and index tips low on its
+    # sides (clear of the knob; higher up they roll the 2 cm handle over) and lifts it;
+    # the blade's friction keeps it out. Power grasps slip off the flat handle.
+    expert = HoldActuatePlan("knife", "knife/blade", ("slider", (0.0, 0.012, 0.003)),
+                             yaw=math.pi, pitch=1.3, approach=(-1.0, 0.0, 1.0), done=0.45,
+                             release=True,
+                             then=PinchPlan("knife", point=(-0.03, 0.0, 0.001), axis="blade",
+                                            lift=0.25))
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"knife": cutters.add_utility_knife(spec, "knife")}

@@ -16,6 +16,7 @@ from dexbench.tasks.catalog import register
 from dexbench.tasks.plans import (
     GraspPlan,
     InsertPlan,
+    PinchPlan,
     SequencePlan,
     Step,
     body_yaw,
@@ -85,14 +86,16 @@ class InsertPeg(TabletopTask):
 PEN_RAISED = 0.2  # m: high enough for the pen, turned tip-down, to clear the holder
 
 
-# Across the barrel near the clip end, so the tip hangs well below the hand once turned
-# down; lifted, then turned tip-down over the holder and lowered in.
+# Pinched between the thumb and index tips across the barrel, nearer the clip end so the
+# tip hangs well below the hand once turned down (the thumb rises as it closes: the tips
+# are levelled where they nearly meet, at the barrel's sides); lifted, then turned
+# tip-down over the holder and lowered in.
 PEN_PLAN = SequencePlan((
-    Step(GraspPlan("pen", point=("tail", (0.035, 0.0, 0.0)), shift=(0.006, -0.016, 0.008),
-                   yaw="body", yaw_offset=math.pi / 2, synergy="pinch", lift=0.25, settle=0.5),
-         until=lambda e, grasp: grasp.carrying & (
+    Step(PinchPlan("pen", point=("tail", (0.05, 0.0, 0.0)), depth=0.004, lift=0.25,
+                   level=0.85),
+         until=lambda e, pinch: pinch.carrying & (
              e.task.lift(e.view, "pen").cpu().numpy() > PEN_RAISED)),
-    Step(InsertPlan("pen", "holder", head="tip", shaft="long"))),
+    Step(InsertPlan("pen", "holder", head="tip", shaft="long", synergy="tip_pinch"))),
     restart=lambda e, experts: (e.task.lift(e.view, "pen") < PEG_DROPPED).cpu().numpy()
     | experts[1].stalled)
 

@@ -152,11 +152,15 @@ class GraspKettle(PourTask):
     # Hooked round the top of its handle bar, palm outside, the fingers between bar and
     # body: the kettle swings forwards in the hand by itself (its centre is 10 cm ahead
     # of the bar) and settles some 55 degrees over, the spout down; the hand turns with it
-    # only a little, and carries the spout 9 cm above the mug's rim.
+    # only a little, and carries the spout 9 cm above the mug's rim. The open hand stands
+    # 2 cm off the bar (the Shadow hand's 1.7, rounded up), whatever its palm's and
+    # fingers' thickness: nearer, a thick hand pushes the kettle off; further, the bar
+    # is not in the fingers' hook.
     expert = PourPlan(
         GraspPlan("kettle", point=("handle", (0.0, 0.0, 0.025)), shift=(-0.02, 0.0, -0.02),
                   yaw="body", yaw_offset=-math.pi / 2, side=True, synergy="hook",
-                  target=object_point("mug", "rim", 0.09), goal_point="spout"),
+                  target=object_point("mug", "rim", 0.09), goal_point="spout",
+                  standoff=0.02),
         tilt=0.3, turn_rate=0.8, about=(-1.0, 0.0, 0.0), squeeze=2.0)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:

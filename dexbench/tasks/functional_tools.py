@@ -29,6 +29,11 @@ def _stove_target(env: DexEnv) -> np.ndarray:
     return env.task.point(env.view, "stove", "target").cpu().numpy()
 
 
+def _across_bar(env: DexEnv) -> np.ndarray:
+    """Fingers square across the handle, turned by the hand's own `bar_yaw`."""
+    return np.full(env.num_envs, math.pi / 2 + env.embodiment.hand.bar_yaw)
+
+
 def _over_burner(env: DexEnv) -> np.ndarray:
     """Let go of a pan hanging tilted once it is centred just above the grate: its low
     rim rests there and stops it coming down further; let go, it falls flat."""
@@ -53,9 +58,10 @@ class GraspPan(TabletopTask):
     # Across the handle near the rim (the shortest lever for the pan's weight), the palm
     # low so the fingers close under the handle. The pan tilts 10-30 deg in the Shadow
     # hand's grip, so its low rim meets the grate first: it is let go just above it. A
-    # squeeze (as the hammer's) or turning the hand to level it loosens this grip.
+    # squeeze (as the hammer's) or turning the hand to level it loosens this grip. Each
+    # hand holds the handle on its own diagonal across the palm (`HandSpec.bar_yaw`).
     expert = GraspPlan("pan", point=("handle", (-0.03, 0.0, -0.014)), shift=(0.03, 0.0, -0.03),
-                       yaw="body", yaw_offset=math.pi / 2, target=_stove_target,
+                       yaw="body", yaw_offset=_across_bar, target=_stove_target,
                        goal_point=("centre", (0.0, 0.0, -0.005)), release=True,
                        let_go=_over_burner)
 

@@ -97,7 +97,9 @@ class GraspPlan:
     "body" (the object's yaw) or "none", turned further by `yaw_offset` (rad, or
     `yaw_offset(env) -> (N,)`). `settle` (s) replaces the closed hand's default wait;
     the fingers close `squeeze` times as far as `synergy` (within the actuators' ranges):
-    a firmer hold on a thin or heavy-ended handle.
+    a firmer hold on a thin or heavy-ended handle. With `standoff` (m) the grasp moves
+    along the palm normal until the open hand stands that far clear of the object (each
+    hand by its own size); without, `shift` alone places it.
     After the grasp the object is lifted `lift` metres, or, with `target(env) -> (N, 3)`,
     carried until its `goal_point` is there; with `release`, the hand then opens and
     backs off (placing), as it does whenever `let_go(env) -> (N,) bool` holds while
@@ -121,6 +123,37 @@ class GraspPlan:
     carry_high: bool = True
     settle: float | None = None
     squeeze: float = 1.0
+    standoff: float | None = None
+
+
+@dataclass(frozen=True)
+class PinchPlan:
+    """Pick a thin object (a pen, a stick lying on the table) off its support between the
+    thumb and index tips: the hand's `synergy` closes those two on each other, the other
+    fingers kept clear of the support.
+
+    The hand comes down palm-down (rolled so the two tips are level) with the fingers
+    `preshape` of the way closed, the line from the thumb tip to the index tip across the
+    object's `axis`, the tips straddling `point` (moved by `shift`, hand frame), their
+    lowest points `depth` (m) below it (an object lying on the table: its height over
+    the table, so the tips sweep in on it). The hand moves with the closing fingers to
+    keep the tips there. The fingers close `squeeze` times as far as `synergy` (within
+    the actuators' ranges: weak fingers press harder), wait `settle` (s), and the hand
+    rises `lift` (m) and holds; a dropped object is grasped again. The tips are levelled
+    as they stand at closure `level` (default `preshape`): a thumb that rises as it closes,
+    levelled nearer where the tips meet, reaches a thin object's side, not its top."""
+
+    obj: str
+    point: PointRef = (0.0, 0.0, 0.0)
+    axis: str = "long"
+    synergy: str = "tip_pinch"
+    preshape: float = 0.5
+    depth: float = 0.0
+    shift: Vec3 = (0.0, 0.0, 0.0)
+    squeeze: float = 1.0
+    settle: float = 0.5
+    lift: float = 0.1
+    level: float | None = None
 
 
 @dataclass(frozen=True)
@@ -219,7 +252,9 @@ class HoldActuatePlan:
     without, its fingers hang beside the point, pads facing the push. Once the joint has
     covered `done` of its travel the hand stops there, or, with `release`, backs off to
     where it came in from (a holding hand keeps holding); then it is finished (for a
-    `SequencePlan`)."""
+    `SequencePlan`). Without `hold`, the other hand waits out of the way, then, with
+    `then`, runs that plan once the joint is done (picks the object up with its part
+    moved) and the pusher is finished when it is."""
 
     obj: str
     joint: str
@@ -232,12 +267,14 @@ class HoldActuatePlan:
     side: str = "right"
     done: float = 1.0
     release: bool = False
+    then: Any = None
 
 
 @dataclass(frozen=True)
 class InsertPlan:
     """Insert the held `peg` (its `head` point and `shaft` axis) into `hole` (its
-    `entrance` and `target` points and `bore` axis, pointing out of the hole)."""
+    `entrance` and `target` points and `bore` axis, pointing out of the hole); the hand
+    keeps closing `synergy` `squeeze` times as far (as the grasp that holds the peg)."""
 
     peg: str
     hole: str
@@ -246,6 +283,8 @@ class InsertPlan:
     entrance: str = "entrance"
     target: str = "target"
     bore: str = "bore"
+    synergy: str = "power"
+    squeeze: float = 1.0
 
 
 @dataclass(frozen=True)
