@@ -134,8 +134,10 @@ HANDS: dict[str, HandSpec] = {
             # Thumb and index tips meet under the palm, the other fingers stay straight
             # (clear of the table); the targets pass the meeting point, so the weak
             # fingers press on a thin object between the tips (`PinchPlan`). Every hand's
-            # `tip_pinch` closes thumb and index only; the other hands' are first guesses
-            # (their `pinch` without the other fingers), not yet tuned.
+            # `tip_pinch` closes thumb and index only. Sharpa's (pen and knife) and
+            # Inspire's (knife; its thumb flexion is sensitive: 0.25 and 0.35 lose the
+            # knife) are tuned by trial; the other hands' are first guesses (their `pinch`
+            # without the other fingers).
             "tip_pinch": {
                 r"A_FFJ3$": 1.5,
                 r"A_FFJ0$": 0.9,
@@ -272,9 +274,9 @@ HANDS: dict[str, HandSpec] = {
                 r"_index_MCP_FE_ctrl$": 0.9,
                 r"_index_(PIP|DIP)_ctrl$": 0.6,
                 r"_thumb_CMC_FE_ctrl$": 1.3,
-                r"_thumb_CMC_AA_ctrl$": 0.3,
-                r"_thumb_MCP_FE_ctrl$": 0.4,
-                r"_thumb_IP_ctrl$": 0.4,
+                r"_thumb_CMC_AA_ctrl$": 0.1,
+                r"_thumb_MCP_FE_ctrl$": 0.3,
+                r"_thumb_IP_ctrl$": 0.3,
             },
         },
     ),
@@ -304,7 +306,7 @@ HANDS: dict[str, HandSpec] = {
                 r"index_proximal_drive$": 0.9,
                 r"index_distal_drive$": 0.9,
                 r"thumb_proximal_1_drive$": 1.3,
-                r"thumb_(proximal_2|middle|distal)_drive$": 0.4,
+                r"thumb_(proximal_2|middle|distal)_drive$": 0.3,
             },
         },
     ),

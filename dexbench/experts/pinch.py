@@ -72,7 +72,7 @@ def _nearest(model: mujoco.MjModel, data: mujoco.MjData, a: list[int], b: list[i
 
 @functools.cache
 def pinch_path(hand_name: str, side: str, synergy: str, preshape: float,
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How the thumb and index tips close, at closures (K,) from `preshape` to 1 towards
     `synergy`: the midpoints of their nearest points (K, 3) and the lowest point of each
     (K, 2, 3; palm-down, the first to touch the table), in the hand frame
@@ -125,6 +125,17 @@ def pinch_path(hand_name: str, side: str, synergy: str, preshape: float,
     return closures, np.array(mids), np.array(lows)
 
 
+def width_closure(closures: np.ndarray, lows: np.ndarray, width: float) -> float:
+    """The closure at which the tips' lowest points `lows` (K, 2, 3) first stand `width`
+    apart across the hand (where they meet an object that wide; the nearest if never)."""
+    apart = np.linalg.norm((lows[:, 1] - lows[:, 0])[:, :2], axis=1)
+    inside = np.flatnonzero(apart <= width)
+    if inside.size == 0 or inside[0] == 0:
+        return float(closures[np.abs(apart - width).argmin()])
+    k = inside[0]
+    return float(np.interp(width, apart[[k, k - 1]], closures[[k, k - 1]]))
+
+
 def level_tilt(lows: np.ndarray) -> np.ndarray:
     """(3, 3) roll of the hand frame about its x axis (along the fingers: the wrist and
     forearm stay up) that puts the two tips' lowest points `lows` (2, 3) level when the
@@ -147,6 +158,8 @@ class PinchExpert:
         # level frame: where the tips are (x, y: between them; z: the lower one) as the
         # fingers close.
         level = plan.preshape if plan.level is None else plan.level
+        if plan.width is not None:
+            level = width_closure(self.closures, lows, plan.width)
         self.tilt = level_tilt(lows[np.abs(self.closures - level).argmin()])
         mids, lows = mids @ self.tilt.T, lows @ self.tilt.T
         self.tips = np.column_stack([mids[:, :2], lows[:, :, 2].max(axis=1)])

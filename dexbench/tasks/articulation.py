@@ -144,7 +144,7 @@ class SlideUtilityKnife(HoldActuateTask):
                              yaw=math.pi, pitch=1.3, approach=(-1.0, 0.0, 1.0), done=0.45,
                              release=True,
                              then=PinchPlan("knife", point=(-0.03, 0.0, 0.001), axis="blade",
-                                            lift=0.25))
+                                            lift=0.25, width=0.026))
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"knife": cutters.add_utility_knife(spec, "knife")}

@@ -141,7 +141,9 @@ class PinchPlan:
     the actuators' ranges: weak fingers press harder), wait `settle` (s), and the hand
     rises `lift` (m) and holds; a dropped object is grasped again. The tips are levelled
     as they stand at closure `level` (default `preshape`): a thumb that rises as it closes,
-    levelled nearer where the tips meet, reaches a thin object's side, not its top."""
+    levelled nearer where the tips meet, reaches a thin object's side, not its top. Given
+    the object's `width` (m) across the tips instead, they are levelled where they stand
+    that far apart, wherever that is on each hand's closing."""
 
     obj: str
     point: PointRef = (0.0, 0.0, 0.0)
@@ -154,6 +156,7 @@ class PinchPlan:
     settle: float = 0.5
     lift: float = 0.1
     level: float | None = None
+    width: float | None = None
 
 
 @dataclass(frozen=True)
