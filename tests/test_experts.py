@@ -60,6 +60,14 @@ def test_task_specific_expert_solves_on_floating_shadow(task, seed, minimum):
     assert solved >= minimum, f"{task}: expert solved {solved}/4"
 
 
+@pytest.mark.parametrize(("task", "minimum"), [("SlideUtilityKnife", 3), ("InsertPen", 2)])
+def test_pinch_experts_solve_on_the_default_embodiment(task, minimum):
+    """The thin-object tip pinch (`PinchPlan`): the knife's left hand lifts it by the
+    handle after the right slid the blade out; the right hand picks the pen off the table."""
+    solved = _solved(task, None, seed=0, enough=4)
+    assert solved >= minimum, f"{task}: expert solved {solved}/4"
+
+
 @pytest.mark.parametrize(("embodiment", "seed"), [("ur10e_leap", 3), ("xarm7_leap", 0)])
 def test_pick_expert_on_arm_mounted_leap(embodiment, seed):
     solved = _solved("PickCube", embodiment, seed=seed, enough=4)

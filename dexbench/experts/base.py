@@ -24,3 +24,11 @@ class Expert(Protocol):
 def host_ids(env_ids: torch.Tensor | np.ndarray | list[int]) -> np.ndarray:
     """Env indices as a numpy array: experts keep their per-env state on the host."""
     return np.asarray(env_ids.cpu() if isinstance(env_ids, torch.Tensor) else env_ids)
+
+
+def phase_machine_state(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                         np.ndarray]:
+    """Fresh per-env state of a one-hand phase machine: phase, seconds in it, finger
+    closure, and the commanded palm position (n, 3) and frame (n, 3, 3)."""
+    return (np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n), np.zeros((n, 3)),
+            np.repeat(np.eye(3)[None], n, axis=0))

@@ -19,7 +19,7 @@ from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.rotations import quat_apply
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
-from dexbench.experts.base import host_ids
+from dexbench.experts.base import host_ids, phase_machine_state
 from dexbench.experts.motion import (
     HANDSHAKE_ROT,
     body_yaw,
@@ -152,11 +152,7 @@ class GraspExpert:
         self._palm_site = model.site(env.embodiment.sides[side].palm_site).id
         self._dt = env.control_dt
         n = env.num_envs
-        self.phase = np.zeros(n, dtype=np.int64)
-        self.timer = np.zeros(n)
-        self.closure = np.zeros(n)
-        self.pos = np.zeros((n, 3))
-        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.phase, self.timer, self.closure, self.pos, self.rot = phase_machine_state(n)
         self.grasp_pos = np.zeros((n, 3))
         self.grasp_rot = self.rot.copy()
         self.lift_from = np.zeros((n, 3))

@@ -22,7 +22,7 @@ from dexbench.embodiments.hand_geometry import hand_geometry, hand_model_spec
 from dexbench.embodiments.hands import HANDS
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
-from dexbench.experts.base import host_ids
+from dexbench.experts.base import host_ids, phase_machine_state
 from dexbench.experts.grasp import squeezed
 from dexbench.experts.motion import palm_down, step_towards, turned, wrap
 from dexbench.tasks.plans import PinchPlan, locate
@@ -173,11 +173,7 @@ class PinchExpert:
         self._palm = env.scene.model.site(env.embodiment.sides[side].palm_site).id
         self._dt = env.control_dt
         n = env.num_envs
-        self.phase = np.zeros(n, dtype=np.int64)
-        self.timer = np.zeros(n)
-        self.closure = np.zeros(n)
-        self.pos = np.zeros((n, 3))
-        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.phase, self.timer, self.closure, self.pos, self.rot = phase_machine_state(n)
         self.pinch_at = np.zeros((n, 3))
         self.grasp_rot = self.rot.copy()
         self.held = np.zeros((n, 3))

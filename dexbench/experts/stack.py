@@ -29,7 +29,7 @@ from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.embodiments.hand_geometry import thumb_actuators
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
-from dexbench.experts.base import host_ids
+from dexbench.experts.base import host_ids, phase_machine_state
 from dexbench.experts.motion import body_yaw, palm_down, step_towards, wrap, yawed
 from dexbench.tasks.plans import StackLiftPlan
 
@@ -118,11 +118,7 @@ class StackLiftExpert:
         bodies = [model.body(env.task.objects[name].root).id for name in self.names]
         self._geoms = [np.flatnonzero(model.geom_bodyid == b) for b in bodies]
         n = env.num_envs
-        self.stage = np.zeros(n, dtype=np.int64)
-        self.timer = np.zeros(n)
-        self.closure = np.zeros(n)
-        self.pos = np.zeros((n, 3))
-        self.rot = np.repeat(np.eye(3)[None], n, axis=0)
+        self.stage, self.timer, self.closure, self.pos, self.rot = phase_machine_state(n)
         self.grasp_pos = np.zeros((n, 3))
         self.grasp_rot = self.rot.copy()
         self.held = np.zeros((n, 3))
