@@ -118,9 +118,10 @@ def stand_off(expert: GraspExpert, distance: float, reach: float = 0.04) -> floa
                        np.repeat(data.xquat[body][None], n, axis=0))
     grasp_pos, grasp_rot = expert.grasp_pos[0], expert.grasp_rot[0]
     colliding = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
-    hand = _subtree(model, model.body(layout.hand_root).id)
     held = _subtree(model, model.body(info.root).id)
-    pairs = [(a, b) for a in np.flatnonzero(colliding & np.isin(model.geom_bodyid, list(hand)))
+    hand = [g for g in env.scene.hand_geoms
+            if model.body(model.geom_bodyid[g]).name.startswith(f"{side}/hand/")]
+    pairs = [(a, b) for a in hand
              for b in np.flatnonzero(colliding & np.isin(model.geom_bodyid, list(held)))]
     # Move the object, not the hand: the palm stays at home, the object goes where the
     # grasp pose (moved back by `back`) puts it relative to the palm.
