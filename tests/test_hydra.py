@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import pytest
 
-from dexbench.cli.config import ConfigError, env_kwargs, load_config
+from dexbench.cli.config import ConfigError, env_kwargs, load_config, spread_device
 from dexbench.cli.eval import EvalError, evaluate, prepare
 from dexbench.cli.introspect import main as dexbench_main
 from dexbench.data.collect import CollectSettings, collect
@@ -137,6 +137,16 @@ def test_train_sweep_trains_dp_and_dp3(tmp_path, capsys):
     for kind in ("dp", "dp3"):
         (best,) = sweep.glob(f"*/PickCube/floating_shadow/{kind}/*/best.pt")
         assert (best.parent / "summary.json").exists()
+
+
+def test_device_auto_spreads_sweep_jobs_over_the_gpus():
+    """`device=auto` in job k of a `-m` sweep on a machine with several GPUs: cuda:(k mod
+    GPUs); with one GPU, outside a sweep, or named explicitly: as given."""
+    assert [spread_device("auto", k, 4) for k in range(6)] == [
+        "cuda:0", "cuda:1", "cuda:2", "cuda:3", "cuda:0", "cuda:1"]
+    assert spread_device("auto", 3, 1) == "auto"
+    assert spread_device("auto", None, 4) == "auto"
+    assert spread_device("cuda:2", 5, 4) == "cuda:2"
 
 
 def test_pyproject_installs_every_package_and_conf():

@@ -37,6 +37,32 @@ class ConfigError(ValueError):
     """Bad command-line overrides."""
 
 
+def spread_device(device: str, job_num: int | None, gpus: int) -> str:
+    """`auto` for job `job_num` of a sweep on a machine with `gpus` GPUs: the job's own
+    GPU, `cuda:<job_num mod gpus>`; anything else unchanged."""
+    if device != "auto" or job_num is None or gpus < 2:
+        return device
+    return f"cuda:{job_num % gpus}"
+
+
+def job_device(device: str) -> str:
+    """`device` for this process: in a `-m` job with several GPUs, `auto` becomes the job's
+    own GPU, so that a launcher's parallel jobs (trainings, evaluations) spread over the
+    GPUs instead of all landing on the first."""
+    from hydra.core.hydra_config import HydraConfig
+    from hydra.types import RunMode
+
+    if device != "auto" or not HydraConfig.initialized():
+        return device
+    hc = HydraConfig.get()
+    if hc.mode != RunMode.MULTIRUN:
+        return device
+    import torch  # here: the light commands that read the config need no torch
+
+    gpus = torch.cuda.device_count() if torch.cuda.is_available() else 0
+    return spread_device(device, hc.job.get("num"), gpus)
+
+
 def load_config(name: str, overrides: list[str]) -> DictConfig:
     """The resolved config `conf/<name>.yaml` with overrides applied."""
     bad = [o for o in overrides if "=" not in o]

@@ -31,6 +31,7 @@ from tqdm import tqdm
 from dexbench.cli.app import Command, hydra_main, register, stamp
 from dexbench.cli.config import (
     env_kwargs,
+    job_device,
     load_config,
     obs_of,
     open_run_dir,
@@ -157,7 +158,7 @@ def spec_of(cfg: DictConfig, untrained: bool = False) -> EvalSpec:
         horizon=None if cfg.horizon is None else int(cfg.horizon),
         env=env_kwargs(OmegaConf.merge(cfg, {"obs": "state", "num_envs": 1})),
         settings=settings, num_envs=None if cfg.num_envs is None else int(cfg.num_envs),
-        device=str(cfg.device), policy_label=cfg.get("label"),
+        device=job_device(str(cfg.device)), policy_label=cfg.get("label"),
         video=Video(tuple(int(e) for e in video["episodes"]), str(video["camera"]),
                     int(video["width"]), int(video["height"])),
         skip_missing=bool(cfg.get("skip_missing", False)), progress=bool(cfg.progress))

@@ -27,6 +27,7 @@ from dexbench.cli.config import (
     ConfigError,
     default_embodiment,
     env_kwargs,
+    job_device,
     open_run_dir,
     runs_root,
 )
@@ -132,7 +133,7 @@ def check(cfg: DictConfig, overrides: list[str]) -> Prepared:
     if cfg.wandb.enabled and importlib.util.find_spec("wandb") is None:
         raise ConfigError("wandb.enabled=true needs `pip install wandb`")
     try:
-        device = resolve_device(cfg.device)
+        device = resolve_device(job_device(str(cfg.device)))
     except (ValueError, RuntimeError) as err:
         raise ConfigError(f"device={cfg.device}: {err}") from None
     demos = training_data(cfg, model_mod)
