@@ -89,8 +89,10 @@ def test_tables_chart_and_merge_on_synthetic_results(tmp_path):
     assert table.cells["PushButton"] == {"dp": 0.25, "dp3": 0.5, "expert": None}
     assert table.means["all"] == {"dp": 0.5, "dp3": 0.625, "expert": 1.0}
     md = markdown(table)
-    assert "| primitive | PickCube | 0.75 | 0.75 | **1.00** |" in md
-    assert "| primitive | PushButton | 0.25 | **0.50** | - |" in md
+    assert ("| primitive | PickCube | 0.75 [0.30, 0.95] | 0.75 [0.30, 0.95] | "
+            "**1.00** [0.51, 1.00] |") in md
+    assert "| primitive | PushButton | 0.25 [0.05, 0.70] | **0.50** [0.15, 0.85] | - |" in md
+    assert "| **all** | **mean** | 0.50 | 0.62 | **1.00** |" in md  # means: no interval
     tex = merged_latex(table)
     assert r"\multirow{2}{*}{primitive}" in tex and r"\textbf{0.50}" in tex
     paths = write_merged(table, tmp_path / "merged")
@@ -102,7 +104,9 @@ def test_tables_chart_and_merge_on_synthetic_results(tmp_path):
     assert merge([str(tmp_path / "a"), str(tmp_path / "b"), f"out={tmp_path / 'cli'}"]) == 0
     assert merge(["--help"]) == 0 and merge([]) == 2  # usage, nothing written
     rows = list(csv.reader((tmp_path / "cli/merged.csv").open()))
-    assert rows[0] == ["category", "task", "dp", "dp3"] and rows[-1][:2] == ["all", "mean"]
+    assert rows[0] == ["category", "task", "dp", "dp3", "dp ci_low", "dp ci_high",
+                       "dp3 ci_low", "dp3 ci_high"] and rows[-1][:2] == ["all", "mean"]
+    assert float(rows[1][4]) == pytest.approx(wilson_interval(3, 4)[0], abs=1e-4)
     with pytest.raises(ConfigError, match="no results"):
         merge([str(tmp_path / "empty")])
 

@@ -106,7 +106,8 @@ def test_split_swept_task_by_task_on_joblib_and_merged(tmp_path, capsys):
     assert all((pathlib.Path(r["run_dir"]) / ".hydra/overrides.yaml").exists() for r in runs)
     assert dexbench_main(["merge", str(sweep), f"out={tmp_path / 'merged'}"]) == 0
     rows = list(csv.reader((tmp_path / "merged/merged.csv").open()))
-    assert rows[0] == ["category", "task", "expert"]  # one column: the jobs' tasks differ
+    assert rows[0][:3] == ["category", "task", "expert"]  # one column: the jobs' tasks differ
+    assert rows[0][3:] == ["expert ci_low", "expert ci_high"]
     assert {r[1] for r in rows} >= {"OpenFaucet", "PushT"}
 
 

@@ -3,7 +3,9 @@ category with a mean row per category and overall, the best value of each row in
 
 A folder without `results.json` stands for every run below it (a `-m` sweep's folder).
 Runs of one policy label on disjoint tasks (a split swept one task per job) share one
-column; runs of one label that overlap get a column each, named by their folders."""
+column; runs of one label that overlap get a column each, named by their folders.
+Published columns (a `Reference`, e.g. the paper's table) can stand beside them, on the
+tasks the runs evaluated."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ import csv
 import io
 import json
 import pathlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from dexbench.eval.tables import tex_escape, write_text
 
@@ -23,11 +25,25 @@ class MergeError(ValueError):
 
 
 @dataclass(frozen=True)
+class Reference:
+    """Published success rates to set beside ours (`conf/reference/<name>.yaml`)."""
+    source: str
+    columns: list[str]
+    tasks: dict[str, list[float]]  # task -> one rate per column
+
+    def label(self, column: str) -> str:
+        return f"{column} (paper)"
+
+
+@dataclass(frozen=True)
 class MergedTable:
     policies: list[str]
     categories: list[tuple[str, list[str]]]  # category -> tasks, in first-seen order
     cells: dict[str, dict[str, float | None]]  # task -> policy -> success rate
     means: dict[str, dict[str, float | None]]  # category (and "all") -> policy -> mean
+    # task -> policy -> 95% Wilson interval (measured columns only)
+    intervals: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
+    sources: list[str] = field(default_factory=list)  # where reference columns come from
 
 
 def load_results(run_dir: pathlib.Path) -> dict:
@@ -73,29 +89,38 @@ def _mean(values: list[float | None]) -> float | None:
     return sum(present) / len(present) if present else None
 
 
-def merge_runs(run_dirs: list[pathlib.Path]) -> MergedTable:
+def merge_runs(run_dirs: list[pathlib.Path], reference: Reference | None = None) -> MergedTable:
     """One table over every task any run evaluated; a policy's means cover the tasks
-    it evaluated (a missing cell shows as '-')."""
+    it evaluated (a missing cell shows as '-'). A reference's columns follow, on the same
+    tasks, so that their means compare with ours."""
     if not run_dirs:
         raise MergeError("name at least one evaluation run folder to merge")
     run_dirs = expand_runs(run_dirs)
     summaries = [load_results(d) for d in run_dirs]
     columns = _labels(summaries, run_dirs)
     policies = list(dict.fromkeys(columns))
+    if reference is not None:
+        policies += [reference.label(c) for c in reference.columns]
     order: dict[str, list[str]] = {}
     cells: dict[str, dict[str, float | None]] = {}
+    intervals: dict[str, dict[str, tuple[float, float]]] = {}
     for policy, summary in zip(columns, summaries, strict=True):
         for t in summary["tasks"]:
             if t["task"] not in cells:
                 order.setdefault(t["category"], []).append(t["task"])
                 cells[t["task"]] = dict.fromkeys(policies)
             cells[t["task"]][policy] = t["success_rate"]
+            intervals.setdefault(t["task"], {})[policy] = (t["ci_low"], t["ci_high"])
     if not cells:
         raise MergeError("none of the runs has a finished task to tabulate")
+    for task, row in cells.items() if reference is not None else ():
+        for column, rate in zip(reference.columns, reference.tasks.get(task, ()), strict=False):
+            row[reference.label(column)] = rate
     means = {cat: {p: _mean([cells[t][p] for t in tasks]) for p in policies}
              for cat, tasks in order.items()}
     means["all"] = {p: _mean([row[p] for row in cells.values()]) for p in policies}
-    return MergedTable(policies, list(order.items()), cells, means)
+    sources = [] if reference is None else [reference.source]
+    return MergedTable(policies, list(order.items()), cells, means, intervals, sources)
 
 
 def _best(row: dict[str, float | None]) -> set[str]:
@@ -107,10 +132,17 @@ def _best(row: dict[str, float | None]) -> set[str]:
     return {p for p, v in row.items() if v == top}
 
 
-def _cells(row: dict[str, float | None], bold: str) -> list[str]:
-    best = _best(row)
-    return [("-" if v is None else bold.format(f"{v:.2f}") if p in best else f"{v:.2f}")
-            for p, v in row.items()]
+def _cells(row: dict[str, float | None], bold: str,
+           intervals: dict[str, tuple[float, float]] | None = None) -> list[str]:
+    """Each value (the row's best in bold), with its interval where one is given."""
+    best, intervals = _best(row), intervals or {}
+    out = []
+    for p, v in row.items():
+        text = "-" if v is None else bold.format(f"{v:.2f}") if p in best else f"{v:.2f}"
+        if v is not None and p in intervals:
+            text += " [{:.2f}, {:.2f}]".format(*intervals[p])
+        out.append(text)
+    return out
 
 
 def markdown(table: MergedTable) -> str:
@@ -118,12 +150,15 @@ def markdown(table: MergedTable) -> str:
              "|---|---|" + "---:|" * len(table.policies)]
     for cat, tasks in table.categories:
         for t in tasks:
-            lines.append(f"| {cat} | {t} | " + " | ".join(_cells(table.cells[t], "**{}**"))
-                         + " |")
+            lines.append(f"| {cat} | {t} | " + " | ".join(
+                _cells(table.cells[t], "**{}**", table.intervals.get(t))) + " |")
         lines.append(f"| *{cat}* | *mean* | "
                      + " | ".join(_cells(table.means[cat], "**{}**")) + " |")
     lines.append("| **all** | **mean** | " + " | ".join(_cells(table.means["all"], "**{}**"))
                  + " |")
+    if table.intervals:
+        lines.append("\nMeasured cells: success rate [95% Wilson interval over episodes].")
+    lines += [f"Columns marked (paper): {s}." for s in table.sources]
     return "\n".join(lines) + "\n"
 
 
@@ -150,15 +185,22 @@ def latex(table: MergedTable) -> str:
 def csv_text(table: MergedTable) -> str:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["category", "task", *table.policies])
+    measured = [p for p in table.policies
+                if any(p in row for row in table.intervals.values())]
+    writer.writerow(["category", "task", *table.policies,
+                     *(f"{p} {b}" for p in measured for b in ("ci_low", "ci_high"))])
 
     def fmt(row: dict[str, float | None]) -> list[str]:
         return ["" if v is None else f"{v:.4f}" for v in row.values()]
 
+    def bounds(task: str | None) -> list[str]:
+        ci = table.intervals.get(task, {}) if task else {}
+        return [f"{ci[p][i]:.4f}" if p in ci else "" for p in measured for i in (0, 1)]
+
     for cat, tasks in table.categories:
-        writer.writerows([cat, t, *fmt(table.cells[t])] for t in tasks)
-        writer.writerow([cat, "mean", *fmt(table.means[cat])])
-    writer.writerow(["all", "mean", *fmt(table.means["all"])])
+        writer.writerows([cat, t, *fmt(table.cells[t]), *bounds(t)] for t in tasks)
+        writer.writerow([cat, "mean", *fmt(table.means[cat]), *bounds(None)])
+    writer.writerow(["all", "mean", *fmt(table.means["all"]), *bounds(None)])
     return out.getvalue()
 
 
