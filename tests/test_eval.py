@@ -96,7 +96,8 @@ def test_tables_chart_and_merge_on_synthetic_results(tmp_path):
     tex = merged_latex(table)
     assert r"\multirow{2}{*}{primitive}" in tex and r"\textbf{0.50}" in tex
     paths = write_merged(table, tmp_path / "merged")
-    assert sorted(paths) == ["csv", "md", "tex"] and all(p.exists() for p in paths.values())
+    assert sorted(paths) == ["csv", "md", "png", "tex"] and all(p.exists() for p in paths.values())
+    assert paths["png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert merge_runs([tmp_path]).policies == table.policies  # a folder of runs: all of them
     (tmp_path / "empty").mkdir()
     with pytest.raises(MergeError, match=r"no results\.json"):

@@ -15,6 +15,7 @@ import json
 import pathlib
 from dataclasses import dataclass, field
 
+from dexbench.eval.plot import merged_chart
 from dexbench.eval.tables import tex_escape, write_text
 
 RESULTS_FILE = "results.json"
@@ -205,10 +206,13 @@ def csv_text(table: MergedTable) -> str:
 
 
 def write_merged(table: MergedTable, out_dir: pathlib.Path) -> dict[str, pathlib.Path]:
-    """merged.{md,tex,csv} in `out_dir`; the paths by format."""
+    """merged.{md,tex,csv} and the category chart merged.png in `out_dir`; the paths by
+    format."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
     for fmt, text in (("md", markdown(table)), ("tex", latex(table)), ("csv", csv_text(table))):
         paths[fmt] = out_dir / f"merged.{fmt}"
         write_text(paths[fmt], text)
+    paths["png"] = out_dir / "merged.png"
+    merged_chart(table.categories, table.means, paths["png"])
     return paths

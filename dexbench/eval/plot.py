@@ -49,3 +49,30 @@ def category_chart(summary: dict, path: pathlib.Path) -> None:
     fig.savefig(tmp, format="png")
     plt.close(fig)
     tmp.replace(path)
+
+
+def merged_chart(categories: list[tuple[str, list[str]]],
+                 means: dict[str, dict[str, float | None]], path: pathlib.Path) -> None:
+    """Grouped bars of a merged table: per category (and overall) one bar per policy
+    column, so that measured and published columns compare at a glance (PNG, temp file,
+    then rename)."""
+    groups = [c for c, _ in categories] + ["all"]
+    policies = list(means["all"])
+    width = 0.8 / max(1, len(policies))
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.3 * len(groups) * len(policies) + 1.5), 3.4),
+                           dpi=150)
+    colors = plt.get_cmap("tab10")
+    for i, policy in enumerate(policies):
+        xs = [g + (i - (len(policies) - 1) / 2) * width for g in range(len(groups))]
+        ys = [means[c][policy] or 0.0 for c in groups]
+        ax.bar(xs, ys, width=width * 0.95, color=colors(i % 10), label=policy,
+               hatch="//" if policy.endswith("(paper)") else None, edgecolor="white")
+    ax.set_xticks(range(len(groups)), groups, rotation=20, ha="right")
+    ax.set_ylim(0, 1.1)
+    ax.set_ylabel("mean success rate")
+    ax.legend(fontsize=7, loc="upper left", ncol=3, frameon=False)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.name}.tmp")
+    fig.savefig(tmp, format="png")
+    plt.close(fig)
+    tmp.replace(path)
