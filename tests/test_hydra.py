@@ -20,6 +20,7 @@ from dataclasses import replace
 
 import pytest
 
+from dexbench.cli import train as train_cli
 from dexbench.cli.config import ConfigError, env_kwargs, load_config, spread_device
 from dexbench.cli.eval import EvalError, evaluate, prepare
 from dexbench.cli.introspect import main as dexbench_main
@@ -138,6 +139,18 @@ def test_train_sweep_trains_dp_and_dp3(tmp_path, capsys):
     for kind in ("dp", "dp3"):
         (best,) = sweep.glob(f"*/PickCube/floating_shadow/{kind}/*/best.pt")
         assert (best.parent / "summary.json").exists()
+    # the sweep's up-front test of every job reads the dataset's metadata only: loading
+    # (and DP3's replay) is left to the jobs, which run in parallel on a launcher
+    mp = pytest.MonkeyPatch()
+    mp.setattr(train_cli, "training_data", lambda *a: pytest.fail("loaded in validate"))
+    try:
+        cfg = load_config("train", ["policy=dp3", "task=PickCube", "device=cpu"])
+        assert train_cli.COMMAND.validate(cfg, [])[0].OBS == "pointcloud"
+        with pytest.raises(ConfigError, match="holds PickCube on floating_shadow"):
+            train_cli.COMMAND.validate(load_config("train", [
+                "policy=dp", "task=PushT", f"dataset={data}"]), [])
+    finally:
+        mp.undo()
 
 
 def test_device_auto_spreads_sweep_jobs_over_the_gpus():

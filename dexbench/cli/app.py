@@ -5,7 +5,8 @@ returns what it prepared; `run(cfg, prepared, out)` does the work in the job's o
 folder `out` (Hydra's `hydra.runtime.output_dir`, from `hydra.run.dir` /
 `hydra.sweep.dir` in conf/, laid out by the command's `run_dir`). The check runs before
 Hydra writes anything: in `CheckFirst.on_run_start`, and with `-m` for every job of a
-basic sweep in `on_multirun_start`; a single run reuses what it prepared. Our errors are
+basic sweep in `on_multirun_start` (its light `validate` where a command has one); a
+single run reuses what it prepared. Our errors are
 one line, `error: ...`, and exit status 2: Hydra passes `SystemExit` through its
 callbacks and jobs, where it would turn an exception into a warning or a report of
 several lines. A sweep job's error is its line (and `error.txt` in its folder); the
@@ -57,6 +58,10 @@ class Command:
     # The run folder under `runs/` as (layout, leaf): `layout` starts with the command's
     # folder (`eval/<split>/<policy>`), `leaf` may hold `{stamp}`. None: no run folder.
     run_dir: Callable[[DictConfig], tuple[str, str]] | None = None
+    # What a sweep tests for every job before the first starts; None: `check`. A command
+    # whose check is heavy (loading data) gives a light one, so the jobs do the heavy
+    # part in parallel.
+    validate: Callable[[DictConfig, list[str]], Any] | None = None
 
     def folder(self, cfg: DictConfig, when: str) -> pathlib.Path:
         """A single run's folder, stamped `when`."""
@@ -146,7 +151,8 @@ class CheckFirst(Callback):
         command = COMMANDS[str(config.hydra.job.config_name)]
         for job in sweep_jobs(config) or []:
             try:
-                command.check(compose(config_name=command.name, overrides=job), job)
+                (command.validate or command.check)(
+                    compose(config_name=command.name, overrides=job), job)
             except (*USER_ERRORS, HydraException, OmegaConfBaseException) as err:
                 fail(f"error: job {' '.join(job)}: {' '.join(str(err).split())}")
 

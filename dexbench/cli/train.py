@@ -123,9 +123,17 @@ class Prepared:
     demos: Demos
 
 
-def check(cfg: DictConfig, overrides: list[str]) -> Prepared:
-    """Settings, device and the demonstrations (checksums verified, replayed to the
-    policy's observations when needed), before the run folder exists."""
+def _same_pair(cfg: DictConfig, meta: dict, source: object) -> None:
+    if cfg.task != meta["task"] or (cfg.embodiment and cfg.embodiment != meta["embodiment"]):
+        raise ConfigError(f"{source} holds {meta['task']} on {meta['embodiment']}; pass "
+                          f"task={meta['task']} embodiment={meta['embodiment']}")
+
+
+def validate(cfg: DictConfig, overrides: list[str]) -> tuple[ModuleType, TrainSettings,
+                                                              torch.device]:
+    """Policy, settings, device and the dataset's task and embodiment, without loading
+    the demonstrations: cheap enough for a sweep to test every job up front, leaving the
+    loading (and a DP3 replay) to the jobs, in parallel."""
     model_mod = model_module(cfg.policy.name)
     if cfg.embodiment:  # before looking for demonstrations that could never exist
         check_pair(task_class(cfg.task), cfg.embodiment)
@@ -136,11 +144,19 @@ def check(cfg: DictConfig, overrides: list[str]) -> Prepared:
         device = resolve_device(job_device(str(cfg.device)))
     except (ValueError, RuntimeError) as err:
         raise ConfigError(f"device={cfg.device}: {err}") from None
+    root = source_dataset(cfg)
+    if root.is_dir():
+        _same_pair(cfg, read_meta(root), root)
+    return model_mod, settings, device
+
+
+def check(cfg: DictConfig, overrides: list[str]) -> Prepared:
+    """Settings, device and the demonstrations (checksums verified, replayed to the
+    policy's observations when needed), before the run folder exists."""
+    model_mod, settings, device = validate(cfg, overrides)
     demos = training_data(cfg, model_mod)
     meta = demos.meta
-    if cfg.task != meta["task"] or (cfg.embodiment and cfg.embodiment != meta["embodiment"]):
-        raise ConfigError(f"{demos.source} holds {meta['task']} on {meta['embodiment']}; pass "
-                          f"task={meta['task']} embodiment={meta['embodiment']}")
+    _same_pair(cfg, meta, demos.source)
     cfg = OmegaConf.merge(cfg, {"embodiment": meta["embodiment"],
                                 "dataset": demos.source, "train": {"epochs": settings.epochs}})
     return Prepared(cfg, model_mod, settings, device, demos)
@@ -200,6 +216,6 @@ def run(_cfg: DictConfig, prepared: Prepared, out: pathlib.Path) -> int:
     return 0
 
 
-COMMAND = register(Command("train", run, check, run_dir))
+COMMAND = register(Command("train", run, check, run_dir, validate))
 main = COMMAND.main
 hydra_entry = hydra_main(COMMAND)
