@@ -105,6 +105,21 @@ def test_pointcloud_is_cropped_to_the_table_volume():
     assert (cloud[..., 2] >= CROP_LO[2] - 1e-6).all()
 
 
+def test_a_bimanual_point_cloud_fuses_the_two_side_views():
+    """The paper fuses two views for bimanual tasks: our side cameras, each facing one
+    hand; one hand keeps the front view, and an explicit camera list still wins."""
+    from dexbench.envs.camera_obs import BIMANUAL_CLOUD, default_cameras
+
+    assert default_cameras(False, ("pointcloud",), arity=2) == BIMANUAL_CLOUD
+    assert default_cameras(False, ("pointcloud",), arity=1) == ("front",)
+    assert default_cameras(False, ("rgb",), arity=2) == ("front",)
+    env = make_env("BimanualLiftTray", num_envs=1, obs="pointcloud", image_size=(32, 32))
+    assert env.cameras.cloud_cameras == ("left", "right")
+    env = make_env("BimanualLiftTray", num_envs=1, obs="pointcloud", image_size=(32, 32),
+                   cameras=["front"])
+    assert env.cameras.cloud_cameras == ("front",)
+
+
 def _fps_reference(points: np.ndarray, valid: np.ndarray, n: int) -> list[int]:
     idx = [int(np.flatnonzero(valid)[0])]
     dist = np.full(len(points), np.inf)

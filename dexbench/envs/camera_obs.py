@@ -16,13 +16,20 @@ from dexbench.envs.pointcloud import crop_mask, depth_to_world, sample_cloud
 
 THIRD_PERSON = tuple(name for name, _, _ in CAMERAS)
 SINGLE_VIEW = ("front",)
+# The paper fuses two views into a bimanual task's point cloud: the side cameras, each
+# facing one hand, so that neither hand hides the object from the cloud.
+BIMANUAL_CLOUD = ("left", "right")
 CROP_LO = (-TABLE_HALF_SIZE[0], -TABLE_HALF_SIZE[1], TABLE_TOP_Z + 0.01)
 CROP_HI = (TABLE_HALF_SIZE[0], TABLE_HALF_SIZE[1], TABLE_TOP_Z + 0.60)
 
 
-def default_cameras(multiview: bool) -> tuple[str, ...]:
-    """The paper's cameras: the front view, or the three third-person views."""
-    return THIRD_PERSON if multiview else SINGLE_VIEW
+def default_cameras(multiview: bool, groups: tuple[str, ...] = (), arity: int = 1
+                    ) -> tuple[str, ...]:
+    """The paper's cameras: the front view, or the three third-person views; a
+    single-view point cloud on two hands fuses the two side views."""
+    if multiview:
+        return THIRD_PERSON
+    return BIMANUAL_CLOUD if arity == 2 and "pointcloud" in groups else SINGLE_VIEW
 
 
 class CameraObservations:

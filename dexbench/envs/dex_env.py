@@ -61,9 +61,10 @@ class DexEnv:
     `obs` is a preset name or a list of groups; `history` overrides the preset's history
     length (k > 0 stacks the last k frames on axis 1). With `auto_reset`, environments
     that terminate or truncate are reset inside `step`. Camera groups render `cameras`
-    (default: the preset's: front, or front/left/right when multiview; wrist cameras are
-    `<side>/hand/wrist_cam`) at `image_size` (width, height) with `renderer` (`cpu`:
-    OpenGL, `warp`: mujoco_warp ray tracing on the GPU), with the lights' shadows unless
+    (default: the preset's: front, or front/left/right when multiview, left/right for a
+    bimanual point cloud; wrist cameras are `<side>/hand/wrist_cam`) at `image_size`
+    (width, height) with `renderer` (`cpu`: OpenGL, `warp`: mujoco_warp ray tracing on the
+    GPU), with the lights' shadows unless
     `shadows` is off (faster, mostly for the ray tracer); the point cloud keeps
     `num_points` points. `terminated` is success held for `SUCCESS_HOLD_STEPS` steps;
     `info["success"]` is the task's condition at this step.
@@ -123,7 +124,8 @@ class DexEnv:
         camera_groups = tuple(g for g in preset.groups if g in CAMERA_GROUPS)
         self.cameras: CameraObservations | None = None
         if camera_groups:
-            names = tuple(cameras) if cameras else default_cameras(preset.multiview)
+            names = tuple(cameras) if cameras else default_cameras(
+                preset.multiview, camera_groups, self.embodiment.arity)
             renderer = make_renderer(self.sim, *image_size, kind=renderer, shadows=shadows)
             self.cameras = CameraObservations(renderer, names, camera_groups, num_points)
         self._terms = ObservationTerms(self.scene, self.view, task, fields)
