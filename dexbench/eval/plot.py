@@ -13,6 +13,16 @@ matplotlib.use("Agg")  # files only: no display on servers
 import matplotlib.pyplot as plt
 
 
+def _save(fig: plt.Figure, ax: plt.Axes, path: pathlib.Path) -> None:
+    """The legend, then the PNG: a temp file renamed, so no reader sees half a chart."""
+    ax.legend(fontsize=7, loc="upper left", ncol=3, frameon=False)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.name}.tmp")
+    fig.savefig(tmp, format="png")
+    plt.close(fig)
+    tmp.replace(path)
+
+
 def category_chart(summary: dict, path: pathlib.Path) -> None:
     """Write the chart as PNG (temp file, then rename)."""
     cats = summary["categories"]
@@ -43,12 +53,7 @@ def category_chart(summary: dict, path: pathlib.Path) -> None:
                             placeholder="...")
     ax.set_title(f"{head}\n{summary['episodes_per_task']} episodes per task, 95% Wilson "
                  "intervals", fontsize=8)
-    ax.legend(fontsize=7, loc="upper left", ncol=3, frameon=False)
-    fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp")
-    fig.savefig(tmp, format="png")
-    plt.close(fig)
-    tmp.replace(path)
+    _save(fig, ax, path)
 
 
 def merged_chart(categories: list[tuple[str, list[str]]],
@@ -70,9 +75,4 @@ def merged_chart(categories: list[tuple[str, list[str]]],
     ax.set_xticks(range(len(groups)), groups, rotation=20, ha="right")
     ax.set_ylim(0, 1.1)
     ax.set_ylabel("mean success rate")
-    ax.legend(fontsize=7, loc="upper left", ncol=3, frameon=False)
-    fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp")
-    fig.savefig(tmp, format="png")
-    plt.close(fig)
-    tmp.replace(path)
+    _save(fig, ax, path)
