@@ -30,25 +30,35 @@ from dexbench.tasks.templates import Placement, Stage, StageTask
 # the side opposite its spout and it falls onto its spout's side (the pour must tilt it
 # towards that side; lying on another face it could not be). A plan step has one hand
 # yaw, so the push is made with the nearest of `TIP_HEADINGS` yaws, the other yaws'
-# steps skipped. Lying, it is grasped from above with the fingers along it, hooking over
-# its top end, and lifted (it sags to about 65-75 deg; the hand pitches down to keep it
-# near level) with its spout over the mug's rim: the pour. It is then led away from the
-# mug and dropped. The mug is carried by its body to the front of the drip tray and let
-# go once the placement has counted; the hand backs out from under the machine's head,
-# rises above it, moves over the lever's outer side and presses the lever down with its
-# finger tips.
-TIP_HEADINGS = 4  # hand yaws, evenly spaced, the tipping push is made with
+# steps skipped. None of them points the fingers straight back (yaw pi): the wrist's
+# yaw joint ends there, and a hand turned to one end of it could not turn on to a
+# lying carton's top just past it (the grasp's yaw) but stayed stuck up to 45 deg off.
+# Once it lies still (its yaw planned while it fell was off), it is grasped from above
+# with the fingers along it, hooking over its top end, lifted straight up until its
+# base is off the table and carried (it sags to about 65-75 deg; the hand pitches down
+# to keep it near level) with its spout over the mug's rim: the pour. It is then led
+# away from the mug and dropped with its top (which lands nearest the mug) clear of it;
+# poured, a carton that slips out is left where it falls. The mug is carried by its
+# body to the front of the drip tray and let go once the placement has counted; the
+# hand backs out from under the machine's head, rises above it, moves over the lever's
+# outer side and presses the lever down with its finger tips. (Still failing: a carton
+# whose top points away from the machine is carried with the forearm pointing at it,
+# and the machine's head stops the forearm short of the mug.)
+TIP_HEADINGS = 8  # hand yaws, evenly spaced (half a step off 0), the push is made with
 TIP_CLEAR = 0.15  # m the hand rises from its start before turning its fingers down
 TIP_RISE = 0.1  # m above the push's start the finger tips come in from
 TIP_HEIGHT = 0.75  # of the spout's height: where the finger tips push the carton's face
 TIP_START = 0.04  # m short of the carton's face the finger tips start
 TIP_PUSH = 0.1  # m the finger tips push on past the face
 TIPPED = 60.0  # deg: the carton is falling over, the push is done
+LYING = 80.0  # deg: tilted this far and `STILL`, the carton has come to rest on its side
+STILL = 0.05  # m/s and rad/s
+LIFT_CLEAR = 0.05  # m its base rises (from standing) straight up before it is carried
 POUR_ABOVE = 0.1  # m the spout is held above the rim
 POUR_HIGH = 0.1  # m higher while it is still more than 2 * `POUR_NEAR` away
 POUR_NEAR = 0.03  # m
 PARK_AWAY = 0.1  # m the poured carton's spout is led on, away from the mug
-PARK_CLEAR = 0.2  # m between carton and mug (their origins) where the carton is let go
+PARK_CLEAR = 0.15  # m between the spout and the mug's axis where the carton is let go
 TRAY_FRONT = 0.05  # m the mug stands in front of the cup spot (task allows 0.09)
 TRAY_DROP = 0.015  # m above the drip tray the mug is let go
 BACK_OFF = 0.12  # m the hand backs away from the machine's front after placing the mug
@@ -68,19 +78,26 @@ def _from_mug(env: DexEnv) -> np.ndarray:
 
 
 def _carton_target(env: DexEnv) -> np.ndarray:
-    """Where the spout goes: over the rim; once poured, straight away from the mug."""
+    """Where the spout goes: first straight up until the carton hangs clear of the table
+    (dragged across it, it twists out of the hook), then over the rim; once poured,
+    straight away from the mug."""
     rim = env.task.point(env.view, "mug", "rim").cpu().numpy()
     spout = env.task.point(env.view, "milk", "spout").cpu().numpy()
+    base = env.view.body_pos("milk")[:, 2] - env.view.initial_body_pos["milk"][:, 2]
+    low = (base.cpu().numpy() < LIFT_CLEAR) & (_stage(env) == 0)
     # Come in high: the carton hangs below the spout; go down only once over the rim.
     off = np.linalg.norm((spout - rim)[:, :2], axis=1)
     above = POUR_ABOVE + POUR_HIGH * np.clip((off - POUR_NEAR) / POUR_NEAR, 0.0, 1.0)
     pour = rim + above[:, None] * [0.0, 0.0, 1.0]
+    pour = np.where(low[:, None], spout + [0.0, 0.0, LIFT_CLEAR], pour)
     return np.where((_stage(env) == 0)[:, None], pour, spout + PARK_AWAY * _from_mug(env))
 
 
 def _carton_parked(env: DexEnv) -> np.ndarray:
-    """Poured and carried well clear of the mug: let go (it drops onto the table)."""
-    apart = (env.view.body_pos("milk") - env.view.body_pos("mug"))[:, :2].norm(dim=1)
+    """Poured and carried well clear of the mug: let go (it drops onto the table). Its
+    top (the spout's end) is what comes down nearest the mug."""
+    spout = env.task.point(env.view, "milk", "spout")
+    apart = (spout - env.view.body_pos("mug"))[:, :2].norm(dim=1)
     return (_stage(env) >= 1) & (apart.cpu().numpy() > PARK_CLEAR)
 
 
@@ -144,16 +161,24 @@ def _tipped(env: DexEnv) -> np.ndarray:
     return tilt_deg(up).cpu().numpy() > TIPPED
 
 
+def _at_rest(env: DexEnv) -> np.ndarray:
+    """The carton lies still: the grasp's yaw (along it) is planned on where it lies."""
+    up = env.view.axis(*env.task.objects["milk"].axes["up"])
+    vel = env.view.free_joint_vel(env.task.objects["milk"].free_joint).abs().amax(dim=1)
+    return ((tilt_deg(up) > LYING) & (vel < STILL)).cpu().numpy()
+
+
 def _other_heading(env: DexEnv, k: int) -> np.ndarray:
     """Heading `k` is not the one nearest the spout's side, or the carton is down: skip."""
     side = _spout_side(env)
-    nearest = np.round(np.arctan2(side[:, 1], side[:, 0]) / (2 * math.pi) * TIP_HEADINGS)
+    nearest = np.round(np.arctan2(side[:, 1], side[:, 0]) / (2 * math.pi) * TIP_HEADINGS
+                       - 0.5)
     return (nearest % TIP_HEADINGS != k) | _tipped(env)
 
 
 def _tip_over(k: int) -> tuple[Step, ...]:
     """Above the push's start, down to it, and on until the carton falls: with yaw `k`."""
-    hang = {"yaw": 2 * math.pi * k / TIP_HEADINGS, "pitch": math.pi / 2}
+    hang = {"yaw": 2 * math.pi * (k + 0.5) / TIP_HEADINGS, "pitch": math.pi / 2}
     rise = [0.0, 0.0, TIP_RISE]
     return tuple(Step(ReachPlan(target, **hang),
                       until=lambda e, r: r.finished | _other_heading(e, k))
@@ -167,13 +192,18 @@ COFFEE_PLAN = SequencePlan((
     # hand above the carton's top: it falls onto its spout's side.
     Step(ReachPlan(lambda _, start: start + [0.0, 0.0, TIP_CLEAR])),
     *(step for k in range(TIP_HEADINGS) for step in _tip_over(k)),
+    # Up out of its way while it falls; on once it lies still.
+    Step(ReachPlan(lambda _, start: start + [0.0, 0.0, TIP_RISE]),
+         until=lambda e, r: r.finished & _at_rest(e)),
     # The tipped-over carton, fingers along it towards its top, hooking over the top's
     # end face: lifted, it hangs at 65-75 deg with its spout leading.
     Step(LevelPlan(GraspPlan("milk", point=(0.0, 0.0, 0.095), shift=(0.0, 0.0, -0.03),
                              pitch=0.3, yaw="none", yaw_offset=_along_carton,
                              target=_carton_target, goal_point="spout",
                              let_go=_carton_parked),
-                   axis="up", tilt=85.0, active=lambda e: _stage(e) == 0)),
+                   axis="up", tilt=85.0, active=lambda e: _stage(e) == 0),
+         # Poured, it is not needed any more: one that slips out is not grasped again.
+         until=lambda e, r: r.finished | ((_stage(e) >= 1) & ~r.carrying)),
     # Let go as soon as the placement has counted, then stay clear of the machine's head.
     Step(GraspPlan("mug", point=(0.0, 0.0, 0.05), yaw="none", target=_in_front_of_spout,
                    release=True, let_go=lambda e: _stage(e) >= 2)),
