@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from collections.abc import Sequence
 
 import numpy as np
 import torch
@@ -53,10 +54,9 @@ class PourExpert:
         adapter = self.grasp.adapter
         opened, closed = adapter.pose("open"), adapter.pose(plan.grasp.synergy)
         squeezed = np.clip(opened + plan.squeeze * (closed - opened), ranges[:, 0], ranges[:, 1])
-        for pattern, target in plan.overrides:
-            chosen = np.array([re.search(pattern, a) is not None for a in actuators])
-            squeezed = np.where(chosen, target, squeezed)
-        adapter.add_pose(SQUEEZE, squeezed)
+        adapter.add_pose(SQUEEZE, _overridden(squeezed, actuators, plan.overrides))
+        if plan.open_overrides:
+            adapter.add_pose("open", _overridden(opened, actuators, plan.open_overrides))
 
     @property
     def phase(self) -> np.ndarray:
@@ -83,6 +83,15 @@ class PourExpert:
         axis = self._held_rot @ np.asarray(self.plan.about)
         grasp.grasp_rot[:] = turned(axis, self._angle) @ self._held_rot
         return grasp.act()
+
+
+def _overridden(pose: np.ndarray, actuators: Sequence[str],
+                overrides: tuple[tuple[str, float], ...]) -> np.ndarray:
+    """`pose` with the actuators matching a regex of `overrides` at its target."""
+    for pattern, target in overrides:
+        chosen = np.array([re.search(pattern, a) is not None for a in actuators])
+        pose = np.where(chosen, target, pose)
+    return pose
 
 
 def _table_clearance(env: DexEnv, plan: PourPlan, side: str) -> float:

@@ -20,6 +20,10 @@ from dexbench.tasks.templates import Placement, PourTask, uniform_points
 # aside, both of which would otherwise lie at the rim once the vessel is tipped and
 # settled in the hand (other hands have no actuators these match).
 KEEP_OFF_RIM = ((r"FFJ", 0.0), (r"THJ5$", -1.05), (r"THJ4$", 1.22))
+# Sharpa hand, open: the thumb drawn back, each joint at its range's end away from the
+# palm (left open, it stands 3 cm off the palm, into a tall vessel's side or shoulder).
+THUMB_BACK = ((r"_thumb_CMC_FE_ctrl$", -0.17), (r"_thumb_MCP_FE_ctrl$", -0.52),
+              (r"_thumb_(CMC|MCP)_AA_ctrl$", -0.35))
 
 
 def body_pour(vessel: str, outlet: str) -> PourPlan:
@@ -118,11 +122,17 @@ class GraspBleach(PourTask):
     vessel, outlet, lift_threshold = "bleach", "nozzle", 0.30
     tolerance, horizontal = 0.02, True
     # Held round its middle from its side, the fingers round its front (nozzle) end: the
-    # pour turn about the palm normal tips the nozzle forwards, over the fingertips.
+    # pour turn about the palm normal tips the nozzle forwards, over the fingertips. The
+    # thumb closes too (`power`: the 0.4 kg jug slides out of a thumbless hook in the
+    # Wuji and Sharpa hands), but the Shadow hand's, swung aside, stays open as in its
+    # hook; the Sharpa hand's open thumb, which would tip the 26 cm jug over on the way
+    # in, comes in drawn back. The jug's centre sits 5 mm short of the cube's place along
+    # the fingers (by trial: 5 mm nearer the palm, the Sharpa hand loses it mid-pour).
     expert = PourPlan(
-        GraspPlan("bleach", point="centre", shift=(-0.01, 0.0, -0.015), yaw="body",
-                  side=True, synergy="hook", target=task_goal, goal_point="nozzle"),
-        tilt=2.0, turn_rate=0.8, squeeze=2.0, overrides=KEEP_OFF_RIM)
+        GraspPlan("bleach", point="centre", shift=(-0.005, 0.0, -0.015), yaw="body",
+                  side=True, synergy="power", target=task_goal, goal_point="nozzle"),
+        tilt=2.0, turn_rate=0.8, squeeze=2.0,
+        overrides=(*KEEP_OFF_RIM, (r"THJ[123]$", 0.0)), open_overrides=THUMB_BACK)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"bleach": vessels.add_bleach_bottle(spec, "bleach")}

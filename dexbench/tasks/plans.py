@@ -297,7 +297,9 @@ class PourPlan:
     (hand frame; z: the palm normal). The fingers close `squeeze` times as far as
     `grasp.synergy` (within the actuators' ranges), but the actuators matching a regex
     of `overrides` go to its target instead. `grasp_turn` (rad, about `about` too) is
-    already there at the grasp; `tilt` is the whole turn, `grasp_turn` included."""
+    already there at the grasp; `tilt` is the whole turn, `grasp_turn` included. The
+    actuators matching a regex of `open_overrides` go to its target in the open hand (the
+    approach): a thumb standing off the palm would knock a tall vessel over on the way in."""
 
     grasp: GraspPlan
     tilt: float
@@ -307,6 +309,7 @@ class PourPlan:
     squeeze: float = 1.0
     overrides: tuple[tuple[str, float], ...] = ()
     grasp_turn: float = 0.0
+    open_overrides: tuple[tuple[str, float], ...] = ()
 
 
 @dataclass(frozen=True)
