@@ -222,8 +222,10 @@ def test_resume_after_interruption_loses_and_repeats_nothing(tmp_path, monkeypat
     assert not out.exists() and len(list(staging.episodes.glob("*.npz"))) == 2
     (staging.episodes / "episode-0-0-9.npz.tmp").write_bytes(b"cut short by a kill")
     after = []
+    capsys.readouterr()
     stats = collect(env, Sway(env), out, settings, {}, on_episode=after.append,
                     progress=False)
+    assert f"resuming {staging.dir}: 2 kept of 2 attempts so far" in capsys.readouterr().err
     keys = [tuple(r["key"]) for r in read_meta(out)["episodes"]]
     assert len(keys) == len(set(keys)) == 5 and stats["successes"] == 5
     assert {e.key for e in before} | {e.key for e in after} == set(keys)

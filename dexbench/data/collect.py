@@ -15,6 +15,7 @@ import dataclasses
 import json
 import pathlib
 import shutil
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -141,8 +142,13 @@ def collect(env: DexEnv, expert: Expert, out: pathlib.Path, settings: CollectSet
     if finished and not staging.dir.exists() and len(finished["episodes"]) >= settings.num_demos:
         return json.loads((out / STATS_FILE).read_text())
     start = Progress(**finished["collection"]["progress"]) if finished else Progress()
+    resumed = staging.dir.exists()
     prog = staging.open(recording, start)
     kept = {ep.key: ep for ep in staging.load()}
+    if resumed:  # an earlier run's counters go on (also an expert changed since)
+        print(f"resuming {staging.dir}: {len(kept)} kept of "
+              f"{len(kept) + prog.timeouts + prog.failures} attempts so far; delete it to "
+              "start over", file=sys.stderr)
     for ep in read_episodes(out, finished) if finished else []:
         if ep.key not in kept:
             ep.save(staging.episodes)
