@@ -24,6 +24,7 @@ from dexbench.experts.reach import ReachExpert
 from dexbench.experts.sequence import SequenceExpert
 from dexbench.experts.stack import StackLiftExpert
 from dexbench.experts.strike import StrikeExpert
+from dexbench.experts.swing import SwingExpert
 from dexbench.experts.turn import TurnExpert
 from dexbench.tasks import plans
 
@@ -41,6 +42,7 @@ KINDS: dict[type, Any] = {
     plans.ReachPlan: ReachExpert,
     plans.StackLiftPlan: StackLiftExpert,
     plans.StrikePlan: StrikeExpert,
+    plans.SwingPlan: SwingExpert,
 }
 
 

@@ -127,6 +127,19 @@ class GraspPlan:
 
 
 @dataclass(frozen=True)
+class SwingPlan:
+    """`grasp` hooks the handle (its `point`) of a part on the hinge `joint` and pulls it
+    along the hinge's arc towards the joint's upper limit for `direction` +1 (a door, a
+    lid): the carried handle is led `lead` (m) ahead along the arc, and the hand turns
+    with the part so its hook stays square to the handle; at the limit it holds still."""
+
+    grasp: GraspPlan
+    joint: str
+    direction: float = 1.0
+    lead: float = 0.08
+
+
+@dataclass(frozen=True)
 class PinchPlan:
     """Pick a thin object (a pen, a stick lying on the table) off its support between the
     thumb and index tips: the hand's `synergy` closes those two on each other, the other
