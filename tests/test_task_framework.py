@@ -367,3 +367,18 @@ def test_docs_state_where_a_threshold_is_not_the_papers():
         assert "Not in the paper" in TASKS[name].success_doc() or "Ours" in (
             TASKS[name].success_doc()), name
     assert TASKS["OpenDrawer"].success_doc() == OpenDrawer.success_text
+
+
+def test_focus_point_is_where_the_reach_reward_leads():
+    """`focus_point` (object, point) is the hand's target for the reach reward; without
+    it, the first object's body."""
+    env = make_env("OpenDrawer", num_envs=2, seed=0, nthread=1)
+    env.reset()
+    view, task = env.view, env.task
+    assert OpenDrawer.focus_point == ("cabinet", "handle")
+    assert torch.equal(task.focus(view), task.point(view, "cabinet", "handle"))
+    env = make_env("OpenFaucet", num_envs=2, seed=0, nthread=1)
+    env.reset()
+    assert env.task.focus_point is None
+    first = next(iter(env.task.objects.values())).root
+    assert torch.equal(env.task.focus(env.view), env.view.body_pos(first))

@@ -43,6 +43,7 @@ class OpenDrawer(ArticulatedTask):
     placements: ClassVar = {"cabinet": Placement((0.15, 0.30), (-0.15, 0.15),
                                                  (math.pi - 0.2, math.pi + 0.2))}
     joint = "cabinet/drawer"
+    focus_point = ("cabinet", "handle")
     # Hand hanging in front of the handle, palm towards the cabinet: the fingers curl
     # behind the bar and the hand pulls along the drawer's axis.
     expert = GraspPlan("cabinet", point="handle", yaw="body", pitch=math.pi / 2,
@@ -51,8 +52,6 @@ class OpenDrawer(ArticulatedTask):
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"cabinet": articulated.add_drawer_cabinet(spec, "cabinet")}
 
-    def focus(self, view):
-        return self.point(view, "cabinet", "handle")
 
 
 @register

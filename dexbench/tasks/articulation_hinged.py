@@ -7,11 +7,9 @@ import math
 from typing import ClassVar
 
 import mujoco
-import torch
 
 from dexbench.assets import hinged
 from dexbench.assets.objects import ObjectInfo
-from dexbench.envs.task_api import SceneView
 from dexbench.tasks.catalog import register
 from dexbench.tasks.plans import GraspPlan, SwingPlan
 from dexbench.tasks.templates import ArticulatedTask, Placement
@@ -40,13 +38,12 @@ class OpenCabinet(ArticulatedTask):
                     "limit from its reset pose.")
     placements: ClassVar = {"cabinet": Placement((0.15, 0.30), (-0.15, 0.15), FACING_ROBOT)}
     joint = "cabinet/joint_11"
+    focus_point = ("cabinet", "handle")
     expert = hook_and_swing("cabinet", joint)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"cabinet": hinged.add_door_cabinet(spec, "cabinet", joint="joint_11")}
 
-    def focus(self, view: SceneView) -> torch.Tensor:
-        return self.point(view, "cabinet", "handle")
 
 
 @register
@@ -60,10 +57,9 @@ class OpenMicrowave(ArticulatedTask):
     # yaw would otherwise reach the hand's fingers at their start.
     placements: ClassVar = {"microwave": Placement((0.20, 0.32), (-0.15, 0.15), FACING_ROBOT)}
     joint = "microwave/door"
+    focus_point = ("microwave", "handle")
     expert = hook_and_swing("microwave", joint)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"microwave": hinged.add_microwave(spec, "microwave")}
 
-    def focus(self, view: SceneView) -> torch.Tensor:
-        return self.point(view, "microwave", "handle")

@@ -147,6 +147,7 @@ class FunctionalHammerStrike(TabletopTask):
         "board": Placement((0.0, 0.15), (0.20, 0.30), (-0.3, 0.3))}
     attached: ClassVar = {"hammer": ("stand", "hammer")}
     contact_objects = ("hammer",)
+    focus_point = ("hammer", "grip")
     memory_size = 1  # 1 once a hand has touched the nail head
     depth = 0.06
     # Across the handle, near the head (a short lever for the press), face over the head;
@@ -178,5 +179,3 @@ class FunctionalHammerStrike(TabletopTask):
     def progress(self, view: SceneView) -> torch.Tensor:
         return self.driven(view) / self.depth
 
-    def focus(self, view: SceneView) -> torch.Tensor:
-        return self.point(view, "hammer", "grip")

@@ -67,7 +67,8 @@ class TabletopTask(Task):
     plan (`dexbench.tasks.plans`). `goal_marker` (a radius) shows a visual sphere at the
     sampled goal point; `contact_objects` are the objects whose contact forces on the
     fingertips the `contact` group reports (default: the first object, the one the
-    task is about); `focus` is where the hand should go (default: the first object).
+    task is about); `focus` is where the hand should go (`focus_point`, an object's
+    named point, or by default the first object).
     """
 
     placements: ClassVar[dict[str, Placement]] = {}
@@ -75,6 +76,7 @@ class TabletopTask(Task):
     reset_joints: ClassVar[dict[str, float | str]] = {}
     goal_marker: ClassVar[float | None] = None
     contact_objects: ClassVar[tuple[str, ...] | None] = None
+    focus_point: ClassVar[tuple[str, str] | None] = None  # (object, point name)
     reach_weight: ClassVar[float] = 2.0
     progress_weight: ClassVar[float] = 4.0
     success_bonus: ClassVar[float] = 8.0
@@ -187,7 +189,9 @@ class TabletopTask(Task):
         return torch.cat(vels, dim=1) if vels else None
 
     def focus(self, view: SceneView) -> torch.Tensor:
-        """(N, 3) where the fingertips should be; the first object by default."""
+        """(N, 3) where the fingertips should be: `focus_point`, else the first object."""
+        if self.focus_point is not None:
+            return self.point(view, *self.focus_point)
         return view.body_pos(next(iter(self.objects.values())).root)
 
     def reward(self, view: SceneView) -> torch.Tensor:
