@@ -9,6 +9,7 @@ import pytest
 import torch
 
 from dexbench.cli import train as train_cli
+from dexbench.cli.config import ConfigError
 from dexbench.data.collect import CollectSettings, collect
 from dexbench.data.meta import DatasetError
 from dexbench.experts import make_expert
@@ -189,3 +190,18 @@ def test_demos_round_trip_through_a_compact_file(demos, tmp_path):
         loaded.episode_ends.tolist()
     np.testing.assert_array_equal(back.obs["proprio"], loaded.obs["proprio"])
     np.testing.assert_array_equal(back.actions, loaded.actions)
+
+
+def test_policy_groups_choose_the_inputs(demos, tmp_path, monkeypatch):
+    """`policy.groups` trains on some of the groups only (here without `policy`, the
+    previous action); the checkpoint records them and acts on an env that has them all.
+    A group the policy cannot use is one clear error."""
+    monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
+    assert train_cli.main(["policy=dp", f"dataset={demos}", *COMMON, *TINY["dp"],
+                           "policy.groups=[proprio,state]"]) == 0
+    run = next(tmp_path.glob("train/PickCube/floating_shadow/dp/*"))
+    assert load_checkpoint(run, "dp")["groups"] == ["proprio", "state"]
+    assert len(_rollout("dp", run, 3)) == 3
+    with pytest.raises(ConfigError, match=r"\['pointcloud'\] not among this policy's inputs"):
+        train_cli.main(["policy=dp", f"dataset={demos}", *COMMON, *TINY["dp"],
+                        "policy.groups=[proprio,pointcloud]"])

@@ -16,6 +16,7 @@ import importlib.util
 import json
 import pathlib
 import sys
+from collections.abc import Iterable
 from dataclasses import dataclass
 from types import ModuleType
 
@@ -66,15 +67,30 @@ def source_dataset(cfg: DictConfig) -> pathlib.Path:
     return path
 
 
+def chosen_groups(cfg: DictConfig, model: ModuleType, available: Iterable[str]) -> list[str]:
+    """The policy's input groups from those available: all it can use, or only
+    `policy.groups` where given (e.g. without `policy`, the previous action, which a
+    policy can learn to repeat instead of acting)."""
+    groups = model.input_groups(available)
+    wanted = cfg.policy.get("groups")
+    if wanted is None:
+        return groups
+    unknown = sorted(set(wanted) - set(groups))
+    if unknown:
+        raise ConfigError(f"policy.groups={list(wanted)}: {unknown} not among this policy's "
+                          f"inputs in the data {groups}")
+    return model.input_groups([g for g in groups if g in set(wanted)])
+
+
 def training_data(cfg: DictConfig, model: ModuleType) -> Demos:
     """The dataset as arrays, replayed to the policy's observation preset when needed."""
     root = source_dataset(cfg)
     if root.suffix == ".npz":
         demos = Demos.load(root)
-        demos.obs = {g: demos.obs[g] for g in model.input_groups(demos.obs)}
+        demos.obs = {g: demos.obs[g] for g in chosen_groups(cfg, model, demos.obs)}
         return demos
     try:
-        groups = model.input_groups(available_groups(root))
+        groups = chosen_groups(cfg, model, available_groups(root))
     except ValueError:
         if model.OBS == "state":
             raise
@@ -90,7 +106,7 @@ def training_data(cfg: DictConfig, model: ModuleType) -> Demos:
             replay_states(root, replayed, model.OBS, num_envs=int(cfg.num_envs),
                           progress=bool(cfg.progress), **settings)
         root = replayed
-        groups = model.input_groups(available_groups(root))
+        groups = chosen_groups(cfg, model, available_groups(root))
     return load_demos(root, groups)
 
 
