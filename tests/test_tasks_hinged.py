@@ -6,8 +6,7 @@ import math
 
 import numpy as np
 import pytest
-import torch
-from test_tasks import _fresh
+from test_tasks import _forward, _fresh, _ok, _set_joint
 
 from dexbench.tasks.plans import SwingPlan
 
@@ -16,12 +15,8 @@ DOORS = [("OpenCabinet", "cabinet/joint_11", "cabinet"),
 
 
 def _set(env, joint: str, q: float) -> None:
-    env.sim.field("qpos")[0, env.scene.model.joint(joint).qposadr[0]] = q
-    env.sim.forward(torch.arange(env.num_envs))
-
-
-def _ok(env) -> bool:
-    return bool(env.task.success(env.view)[0])
+    _set_joint(env, joint, q)
+    _forward(env)
 
 
 @pytest.mark.parametrize(("name", "joint", "obj"), DOORS)

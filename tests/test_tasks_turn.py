@@ -5,26 +5,18 @@ near-limit rest but not 36%."""
 
 import math
 
-import torch
+from test_tasks import _fresh, _ok, _set_joint
 
 from dexbench.tasks.plans import TurnPlan
-from dexbench.tasks.registry import make_env
-
-
-def _env(name: str):
-    env = make_env(name, num_envs=2, seed=0, nthread=1)
-    env.reset()
-    return env
 
 
 def _success(env, joint: str, value: float) -> bool:
-    env.sim.field("qpos")[0, env.scene.model.joint(joint).qposadr[0]] = value
-    env.sim.forward(torch.arange(env.num_envs))
-    return bool(env.task.success(env.view)[0])
+    _set_joint(env, joint, value)
+    return _ok(env)
 
 
 def test_knob_resets_in_the_middle_and_succeeds_at_either_end():
-    env = _env("RotateKnob")
+    env = _fresh("RotateKnob")
     joint = env.task.joint
     lo, hi = env.task.objects["knob"].joints[joint]
     assert math.isclose(hi - lo, math.pi) and env.task.initial_joints[joint] == 0.0
@@ -37,7 +29,7 @@ def test_knob_resets_in_the_middle_and_succeeds_at_either_end():
 
 
 def test_bucket_resets_near_its_stop_and_succeeds_at_40_percent():
-    env = _env("GraspBucket")
+    env = _fresh("GraspBucket")
     joint = env.task.joint
     lo, hi = env.task.objects["bucket"].joints[joint]
     q0 = env.task.initial_joints[joint]
@@ -50,7 +42,7 @@ def test_bucket_resets_near_its_stop_and_succeeds_at_40_percent():
 
 def test_bail_rests_on_its_stop_when_left_alone():
     """No spring: left alone for 1 s the bail falls onto its stop and the pail stays put."""
-    env = _env("GraspBucket")
+    env = _fresh("GraspBucket")
     action = env.home_action.repeat(env.num_envs, 1)
     for _ in range(60):
         env.step(action)
