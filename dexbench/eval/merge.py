@@ -114,9 +114,11 @@ def merge_runs(run_dirs: list[pathlib.Path], reference: Reference | None = None)
             intervals.setdefault(t["task"], {})[policy] = (t["ci_low"], t["ci_high"])
     if not cells:
         raise MergeError("none of the runs has a finished task to tabulate")
-    for task, row in cells.items() if reference is not None else ():
-        for column, rate in zip(reference.columns, reference.tasks.get(task, ()), strict=False):
-            row[reference.label(column)] = rate
+    if reference is not None:
+        for task, row in cells.items():
+            published = reference.tasks.get(task, ())
+            for column, rate in zip(reference.columns, published, strict=False):
+                row[reference.label(column)] = rate
     means = {cat: {p: _mean([cells[t][p] for t in tasks]) for p in policies}
              for cat, tasks in order.items()}
     means["all"] = {p: _mean([row[p] for row in cells.values()]) for p in policies}
