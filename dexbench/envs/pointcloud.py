@@ -40,18 +40,26 @@ def farthest_point_sample(points: torch.Tensor, mask: torch.Tensor, n: int) -> t
 
     Starts from the first valid point of each cloud (deterministic). A cloud with no
     valid point yields index 0 throughout; one with fewer than n valid points repeats
-    points once all have been taken.
+    points once all have been taken. Masked points start at distance -1 and stay there
+    (distances are never negative); the coordinates are laid out one plane per axis and
+    updated in place, which makes the loop several times faster on the CPU than
+    per-point vectors, with the same sums in the same order.
     """
     batch, count, _ = points.shape
     rows = torch.arange(batch, device=points.device)
+    planes = points.permute(2, 0, 1).contiguous()
     dist = torch.full((batch, count), float("inf"), dtype=points.dtype, device=points.device)
     dist[~mask] = -1.0
     chosen = torch.zeros(batch, n, dtype=torch.long, device=points.device)
+    step, term = torch.empty_like(dist), torch.empty_like(dist)
     current = mask.to(torch.int8).argmax(dim=1)
     for k in range(n):
         chosen[:, k] = current
-        step = (points - points[rows, current][:, None]).square().sum(dim=-1)
-        dist = torch.where(mask, torch.minimum(dist, step), dist)
+        centre = points[rows, current]
+        torch.sub(planes[0], centre[:, 0:1], out=step).square_()
+        for axis in (1, 2):
+            step.add_(torch.sub(planes[axis], centre[:, axis:axis + 1], out=term).square_())
+        torch.minimum(dist, step, out=dist)
         current = dist.argmax(dim=1)
     return chosen
 
