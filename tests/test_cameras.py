@@ -255,3 +255,24 @@ def test_warp_point_clouds_agree_with_opengl_point_clouds():
     gaps = torch.cat([torch.cdist(a, b).min(dim=2).values, torch.cdist(b, a).min(dim=2).values])
     assert gaps.median() < 0.005, f"median gap {gaps.median():.4f} m"
     assert torch.quantile(gaps, 0.95) < 0.02, f"95% gap {torch.quantile(gaps, 0.95):.4f} m"
+
+
+def _first_cloud(**kwargs) -> torch.Tensor:
+    env = make_env("StackCube", num_envs=2, seed=2, obs="pointcloud", image_size=(64, 48),
+                   **kwargs)
+    return env.reset()["pointcloud"][:, -1]
+
+
+def test_point_cloud_device_cpu_is_the_cpu_renderers_default():
+    assert torch.equal(_first_cloud(), _first_cloud(cloud_device="cpu"))
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs CUDA")
+def test_point_cloud_on_cuda_agrees_with_the_cpu_and_comes_back_on_the_cpu():
+    """Computed on the GPU, the cloud is returned where the renderer's images are and
+    describes the same points (the sums may differ in the last bits, hence the sampling
+    in rare ties)."""
+    cpu, gpu = _first_cloud(), _first_cloud(cloud_device="cuda")
+    assert gpu.device.type == "cpu" and gpu.shape == cpu.shape
+    gaps = torch.cdist(gpu.float(), cpu.float()).min(dim=2).values
+    assert torch.quantile(gaps, 0.95) < 1e-4

@@ -51,6 +51,7 @@ def test_inspect_works_for_every_task(task):
     ("task=Nope", "unknown task 'Nope'"),
     ("embodiment=floating_claw", "unknown embodiment"),
     ("nosuchkey=1", "nosuchkey"),
+    ("camera.cloud_device=tpu", "use null, cpu or cuda"),
 ])
 def test_bad_input_gives_one_line_error(arg, needle):
     out = _run("-m", "dexbench", "inspect", arg)

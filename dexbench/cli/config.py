@@ -111,11 +111,27 @@ def env_kwargs(cfg: DictConfig) -> dict:
                 nthread=int(cfg.sim.nthread), physics=physics,
                 cameras=list(cam.names) if cam.names else None,
                 image_size=(int(cam.width), int(cam.height)), num_points=int(cam.num_points),
-                renderer=renderer_of(cfg), shadows=bool(cam.shadows),
+                cloud_device=cloud_device_of(cfg), renderer=renderer_of(cfg),
+                shadows=bool(cam.shadows),
                 visual=VisualVariation(**OmegaConf.to_container(cfg.visual)),
                 physical=PhysicalVariation(**{
                     k: tuple(v) if isinstance(v, list) else v
                     for k, v in OmegaConf.to_container(cfg.physical).items()}))
+
+
+def cloud_device_of(cfg: DictConfig) -> str | None:
+    """`camera.cloud_device`: null (the renderer's device), cpu or cuda, checked."""
+    device = cfg.camera.get("cloud_device")
+    if device is None:
+        return None
+    if device not in ("cpu", "cuda"):
+        raise ConfigError(f"camera.cloud_device={device}: use null, cpu or cuda")
+    import torch  # here, as above
+
+    if device == "cuda" and not torch.cuda.is_available():
+        raise ConfigError("camera.cloud_device=cuda but no CUDA device is visible: "
+                          "use camera.cloud_device=null")
+    return device
 
 
 def renderer_of(cfg: DictConfig) -> str:

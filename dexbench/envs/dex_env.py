@@ -66,7 +66,8 @@ class DexEnv:
     (width, height) with `renderer` (`cpu`: OpenGL, `warp`: mujoco_warp ray tracing on the
     GPU), with the lights' shadows unless
     `shadows` is off (faster, mostly for the ray tracer); the point cloud keeps
-    `num_points` points. `terminated` is success held for `SUCCESS_HOLD_STEPS` steps;
+    `num_points` points, computed on `cloud_device` (default: where the renderer leaves
+    the depth images). `terminated` is success held for `SUCCESS_HOLD_STEPS` steps;
     `info["success"]` is the task's condition at this step.
     """
 
@@ -87,6 +88,7 @@ class DexEnv:
         renderer: str = "cpu",
         shadows: bool = True,
         num_points: int = 512,
+        cloud_device: str | None = None,
         visual: VisualVariation | None = None,
         physical: PhysicalVariation | None = None,
     ) -> None:
@@ -127,7 +129,8 @@ class DexEnv:
             names = tuple(cameras) if cameras else default_cameras(
                 preset.multiview, camera_groups, self.embodiment.arity)
             renderer = make_renderer(self.sim, *image_size, kind=renderer, shadows=shadows)
-            self.cameras = CameraObservations(renderer, names, camera_groups, num_points)
+            self.cameras = CameraObservations(renderer, names, camera_groups, num_points,
+                                              cloud_device)
         self._terms = ObservationTerms(self.scene, self.view, task, fields)
 
         emb = self.embodiment

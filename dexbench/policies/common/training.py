@@ -78,8 +78,10 @@ class _Batches:
 
 
 def _copy_state(model: torch.nn.Module) -> dict[str, torch.Tensor]:
-    """A copy that later updates do not touch, kept on the training device (fast)."""
-    return {k: v.detach().clone() for k, v in model.state_dict().items()}
+    """A copy that later updates do not touch, kept in host memory: a DP3-sized model's
+    best snapshot (model and EMA, 2 GB) would otherwise hold GPU memory that trainings
+    sharing one GPU need."""
+    return {k: v.detach().to("cpu", copy=True) for k, v in model.state_dict().items()}
 
 
 def train_policy(model: DiffusionPolicyModel, demos: Demos, normalizer: MinMaxNormalizer,
