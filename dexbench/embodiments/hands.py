@@ -136,8 +136,8 @@ HANDS: dict[str, HandSpec] = {
             # fingers press on a thin object between the tips (`PinchPlan`). Every hand's
             # `tip_pinch` closes thumb and index only. Sharpa's (pen and knife) and
             # Inspire's (knife; its thumb flexion is sensitive: 0.25 and 0.35 lose the
-            # knife) are tuned by trial; the other hands' are first guesses (their `pinch`
-            # without the other fingers).
+            # knife) are tuned by trial, Wuji's searched (see there); the other hands' are
+            # first guesses (their `pinch` without the other fingers).
             "tip_pinch": {
                 r"A_FFJ3$": 1.5,
                 r"A_FFJ0$": 0.9,
@@ -336,12 +336,21 @@ HANDS: dict[str, HandSpec] = {
                 r"finger1_joint2_actuator$": 0.6,
                 r"finger1_joint[34]_actuator$": 0.4,
             },
+            # A ring pinch: the index, little bent at the knuckle, curls its tip down onto
+            # the thumb's (its last joint straight), the two about level (they meet at
+            # 0.86 closure and press past it). Found by a random search over the tips'
+            # closing path (3 cm apart at the preshape, touching at the end) and then over
+            # InsertPen's expert (the pen held tip-down); the first guess's tips passed 7 mm
+            # apart, and other candidates' let the pen slide out once tip-down.
             "tip_pinch": {
-                r"finger2_joint1_actuator$": 0.9,
-                r"finger2_joint[34]_actuator$": 0.6,
-                r"finger1_joint1_actuator$": 1.3,
-                r"finger1_joint2_actuator$": 0.6,
-                r"finger1_joint[34]_actuator$": 0.4,
+                r"finger2_joint1_actuator$": 0.42,
+                r"finger2_joint2_actuator$": -0.09,
+                r"finger2_joint3_actuator$": 1.5,
+                r"finger2_joint4_actuator$": 1.11,
+                r"finger1_joint1_actuator$": 0.82,
+                r"finger1_joint2_actuator$": 0.57,
+                r"finger1_joint3_actuator$": 1.29,
+                r"finger1_joint4_actuator$": -0.4,
             },
         },
     ),

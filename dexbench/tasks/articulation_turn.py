@@ -35,7 +35,10 @@ class RotateKnob(ArticulatedTask):
     joint, reset_at, threshold = "knob/dial", 0.0, 0.95
     deviations = ("Ours where the paper says 'to either end': within 4.5° of a stop (95% "
                   "of the 90° from the middle reset to it).",)
-    expert = TurnPlan("knob", "tip")
+    # The fingers lean out along the bar (tips down on its end): an arm's hand reaches
+    # the far-out knob only reaching forward, never hanging straight down; and it turns
+    # the bar's tip towards the robot (either end counts), never out of reach.
+    expert = TurnPlan("knob", "tip", direction=0.0, lean=1.2)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"knob": turned.add_knob(spec, "knob")}

@@ -203,9 +203,16 @@ class PressPlan:
 class TurnPlan:
     """Push the `tip` point of `obj`'s hinged part along its arc, about `obj`'s joint
     `hinge` (default: its only joint), towards the joint's upper limit for `direction`
-    +1. With `pitch` (rad) the hand is palm-down, fingers along the object root's x axis
-    tilted down by `pitch`, and comes in from `approach` (a direction in the root's
-    frame); without, it hangs its fingers beside the tip and comes down from above."""
+    +1 (lower for -1; for 0, whichever end leaves the tip nearer the hand's start, for
+    parts that may go either way). With `pitch` (rad) the hand is palm-down, fingers
+    along the object root's x axis tilted down by `pitch`, and comes in from `approach`
+    (a direction in the root's frame, its length scaling the hover height); without, it
+    hangs its fingers beside the tip and comes down from `approach` (above), and `lean`
+    (rad) swings the hanging fingers out along the tip's radius (negative: in towards
+    the hinge; pads still facing the push): an arm's hand then reaches a tip far out
+    over the table. With `period` (rad) the tip repeats that often round the hinge (a
+    cap's fins): the hand pushes one copy through a period, lifts and comes down behind
+    the next, stroke after stroke. `push_speed` (m/s) limits the hand while it pushes."""
 
     obj: str
     tip: PointRef
@@ -213,6 +220,9 @@ class TurnPlan:
     direction: float = 1.0
     pitch: float | None = None
     approach: Vec3 = (0.0, 0.0, 1.0)
+    lean: float = 0.0
+    period: float | None = None
+    push_speed: float = 0.1
 
 
 @dataclass(frozen=True)
