@@ -92,7 +92,10 @@ def test_tables_chart_and_merge_on_synthetic_results(tmp_path):
     assert ("| primitive | PickCube | 0.75 [0.30, 0.95] | 0.75 [0.30, 0.95] | "
             "**1.00** [0.51, 1.00] |") in md
     assert "| primitive | PushButton | 0.25 [0.05, 0.70] | **0.50** [0.15, 0.85] | - |" in md
-    assert "| **all** | **mean** | 0.50 | 0.62 | **1.00** |" in md  # means: no interval
+    # means carry no interval; one over part of the row is marked and never the best
+    assert "| **all** | **mean** | 0.50 | **0.62** | 1.00 (1/2) |" in md
+    assert "covers only the k of the row's n tasks" in md
+    assert table.mean_row("all") == {"dp": 0.5, "dp3": 0.625, "expert": None}
     tex = merged_latex(table)
     assert r"\multirow{2}{*}{primitive}" in tex and r"\textbf{0.50}" in tex
     paths = write_merged(table, tmp_path / "merged")

@@ -45,6 +45,13 @@ class MergedTable:
     # task -> policy -> 95% Wilson interval (measured columns only)
     intervals: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
     sources: list[str] = field(default_factory=list)  # where reference columns come from
+    # category (and "all") -> policy -> (tasks it evaluated, tasks in the row), where fewer
+    partial: dict[str, dict[str, tuple[int, int]]] = field(default_factory=dict)
+
+    def mean_row(self, cat: str) -> dict[str, float | None]:
+        """The row's means, less those over only some of its tasks (not comparable)."""
+        return {p: None if p in self.partial.get(cat, {}) else v
+                for p, v in self.means[cat].items()}
 
 
 def load_results(run_dir: pathlib.Path) -> dict:
@@ -92,8 +99,9 @@ def _mean(values: list[float | None]) -> float | None:
 
 def merge_runs(run_dirs: list[pathlib.Path], reference: Reference | None = None) -> MergedTable:
     """One table over every task any run evaluated; a policy's means cover the tasks
-    it evaluated (a missing cell shows as '-'). A reference's columns follow, on the same
-    tasks, so that their means compare with ours."""
+    it evaluated (a missing cell shows as '-'; a mean over only some of a row's tasks is
+    marked with their count and never the row's best). A reference's columns follow, on
+    the same tasks, so that their means compare with ours."""
     if not run_dirs:
         raise MergeError("name at least one evaluation run folder to merge")
     run_dirs = expand_runs(run_dirs)
@@ -122,8 +130,13 @@ def merge_runs(run_dirs: list[pathlib.Path], reference: Reference | None = None)
     means = {cat: {p: _mean([cells[t][p] for t in tasks]) for p in policies}
              for cat, tasks in order.items()}
     means["all"] = {p: _mean([row[p] for row in cells.values()]) for p in policies}
+    rows = {**order, "all": list(cells)}
+    partial = {cat: {p: (k, len(tasks)) for p in policies
+                     if 0 < (k := sum(cells[t][p] is not None for t in tasks)) < len(tasks)}
+               for cat, tasks in rows.items()}
     sources = [] if reference is None else [reference.source]
-    return MergedTable(policies, list(order.items()), cells, means, intervals, sources)
+    return MergedTable(policies, list(order.items()), cells, means, intervals, sources,
+                       partial)
 
 
 def _best(row: dict[str, float | None]) -> set[str]:
@@ -136,16 +149,25 @@ def _best(row: dict[str, float | None]) -> set[str]:
 
 
 def _cells(row: dict[str, float | None], bold: str,
-           intervals: dict[str, tuple[float, float]] | None = None) -> list[str]:
-    """Each value (the row's best in bold), with its interval where one is given."""
-    best, intervals = _best(row), intervals or {}
+           intervals: dict[str, tuple[float, float]] | None = None,
+           partial: dict[str, tuple[int, int]] | None = None) -> list[str]:
+    """Each value (the row's best in bold), with its interval where one is given, or
+    the count of tasks behind a partial mean."""
+    intervals, partial = intervals or {}, partial or {}
+    best = _best({p: v for p, v in row.items() if p not in partial})
     out = []
     for p, v in row.items():
         text = "-" if v is None else bold.format(f"{v:.2f}") if p in best else f"{v:.2f}"
         if v is not None and p in intervals:
             text += " [{:.2f}, {:.2f}]".format(*intervals[p])
+        if v is not None and p in partial:
+            text += " ({}/{})".format(*partial[p])
         out.append(text)
     return out
+
+
+def _mean_cells(table: MergedTable, cat: str, bold: str) -> list[str]:
+    return _cells(table.means[cat], bold, partial=table.partial.get(cat))
 
 
 def markdown(table: MergedTable) -> str:
@@ -155,12 +177,15 @@ def markdown(table: MergedTable) -> str:
         for t in tasks:
             lines.append(f"| {cat} | {t} | " + " | ".join(
                 _cells(table.cells[t], "**{}**", table.intervals.get(t))) + " |")
-        lines.append(f"| *{cat}* | *mean* | "
-                     + " | ".join(_cells(table.means[cat], "**{}**")) + " |")
-    lines.append("| **all** | **mean** | " + " | ".join(_cells(table.means["all"], "**{}**"))
+        lines.append(f"| *{cat}* | *mean* | " + " | ".join(_mean_cells(table, cat, "**{}**"))
+                     + " |")
+    lines.append("| **all** | **mean** | " + " | ".join(_mean_cells(table, "all", "**{}**"))
                  + " |")
     if table.intervals:
         lines.append("\nMeasured cells: success rate [95% Wilson interval over episodes].")
+    if any(table.partial.values()):
+        lines.append("A mean marked (k/n) covers only the k of the row's n tasks that "
+                     "policy has: not comparable with the others.")
     lines += [f"Columns marked (paper): {s}." for s in table.sources]
     return "\n".join(lines) + "\n"
 
@@ -178,9 +203,9 @@ def latex(table: MergedTable) -> str:
             lines.append(f"{head} & {tex_escape(t)} & "
                          + " & ".join(_cells(table.cells[t], bold)) + r" \\")
         lines += [r"\cmidrule{2-" + str(2 + len(table.policies)) + "}",
-                  " & Mean & " + " & ".join(_cells(table.means[cat], bold)) + r" \\",
+                  " & Mean & " + " & ".join(_mean_cells(table, cat, bold)) + r" \\",
                   r"\midrule"]
-    lines += [r"\multicolumn{2}{l}{Mean} & " + " & ".join(_cells(table.means["all"], bold))
+    lines += [r"\multicolumn{2}{l}{Mean} & " + " & ".join(_mean_cells(table, "all", bold))
               + r" \\", r"\bottomrule", r"\end{tabular}"]
     return "\n".join(lines) + "\n"
 
@@ -216,5 +241,5 @@ def write_merged(table: MergedTable, out_dir: pathlib.Path) -> dict[str, pathlib
         paths[fmt] = out_dir / f"merged.{fmt}"
         write_text(paths[fmt], text)
     paths["png"] = out_dir / "merged.png"
-    merged_chart(table.categories, table.means, paths["png"])
+    merged_chart(table.categories, {c: table.mean_row(c) for c in table.means}, paths["png"])
     return paths
