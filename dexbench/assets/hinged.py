@@ -38,16 +38,17 @@ def _carcass(body: mujoco.MjsBody, name: str, hx: float, hy: float, hz: float,
 def _door(base: mujoco.MjsBody, name: str, joint: str, hinge: tuple[float, float],
           width: float, z: tuple[float, float], thick: float, mass: float,
           opening: float, damping: float, friction: float, rgba: tuple[float, ...],
-          handle_z: float) -> tuple[str, tuple[float, float, float]]:
-    """A door panel from the hinge line at `hinge` (x, y) along +y by `width`, between
-    heights `z`, opening about -z (free edge towards +x) by up to `opening`; returns
-    the joint and the handle's middle in the door frame."""
+          handle_z: float, side: float = 1.0) -> tuple[str, tuple[float, float, float]]:
+    """A door panel from the hinge line at `hinge` (x, y) along +y by `width` (along -y
+    for `side` -1: the mirror image, for a double door's other leaf), between heights
+    `z`, opening (free edge towards +x) by up to `opening`; returns the joint and the
+    handle's middle in the door frame."""
     door = base.add_body(name=f"{name}/door", pos=[hinge[0] + GAP, hinge[1], 0.0])
-    add_joint(door, f"{name}/{joint}", "hinge", (0, 0, -1), (0.0, opening), damping, friction,
-              armature=0.01)
+    add_joint(door, f"{name}/{joint}", "hinge", (0, 0, -side), (0.0, opening), damping,
+              friction, armature=0.01)
     add_geom(door, f"{name}/door", "box", [thick / 2, width / 2, (z[1] - z[0]) / 2], rgba,
-             mass, pos=[thick / 2, width / 2, (z[0] + z[1]) / 2])
-    handle = (thick + BAR_OUT, width - 0.07, handle_z)
+             mass, pos=[thick / 2, side * width / 2, (z[0] + z[1]) / 2])
+    handle = (thick + BAR_OUT, side * (width - 0.07), handle_z)
     add_geom(door, f"{name}/handle", "capsule", [0.008, 0.05], DARK, 0.05, pos=handle,
              quat=[0.7071068, 0.7071068, 0, 0])
     for sy in (1, -1):

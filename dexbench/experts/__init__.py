@@ -12,6 +12,7 @@ from typing import Any
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.experts.bimanual import TwoHandLiftExpert
+from dexbench.experts.both_hands import BothHandsExpert
 from dexbench.experts.grasp import GraspExpert, LevelGraspExpert
 from dexbench.experts.hold_actuate import HoldActuateExpert
 from dexbench.experts.insert import InsertExpert
@@ -47,10 +48,12 @@ KINDS: dict[type, Any] = {
 
 
 def build_expert(env: DexEnv, plan: Any) -> Expert:
-    """The expert running `plan` (any kind, or a `SequencePlan` or `HoldActuatePlan` of
-    them) on `env`."""
+    """The expert running `plan` (any kind, or a `SequencePlan`, `HoldActuatePlan` or
+    `BothHandsPlan` of them) on `env`."""
     if isinstance(plan, plans.SequencePlan):
         return SequenceExpert(env, plan, build_expert)
+    if isinstance(plan, plans.BothHandsPlan):
+        return BothHandsExpert(env, plan, lambda hand, side: KINDS[type(hand)](env, hand, side))
     if isinstance(plan, plans.HoldActuatePlan):
         return HoldActuateExpert(env, plan, lambda hold, side: KINDS[type(hold)](env, hold, side))
     try:

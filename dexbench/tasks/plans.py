@@ -131,12 +131,27 @@ class SwingPlan:
     """`grasp` hooks the handle (its `point`) of a part on the hinge `joint` and pulls it
     along the hinge's arc towards the joint's upper limit for `direction` +1 (a door, a
     lid): the carried handle is led `lead` (m) ahead along the arc, and the hand turns
-    with the part so its hook stays square to the handle; at the limit it holds still."""
+    with the part so its hook stays square to the handle; at the limit it holds still.
+    With `latch` (the hinge joint of a handle on the part: a door's lever that draws its
+    latch), the hooked handle is first turned the same way about that joint, towards its
+    upper limit, until it has covered `latch_turn` of its travel; the part then swings
+    with the hand keeping the handle turned."""
 
     grasp: GraspPlan
     joint: str
     direction: float = 1.0
     lead: float = 0.08
+    latch: str | None = None
+    latch_turn: float = 0.9
+
+
+@dataclass(frozen=True)
+class BothHandsPlan:
+    """Each hand runs its own plan at the same time (`hands`: side -> a plan of a kind
+    whose script takes a side, e.g. `GraspPlan`, `SwingPlan`): two doors, one per hand.
+    Finished once every hand's plan is."""
+
+    hands: Mapping[str, Any]
 
 
 @dataclass(frozen=True)
