@@ -22,6 +22,22 @@ from dexbench.assets.parts import add_joint, add_visual
 CAST_IRON = (0.55, 0.12, 0.1, 1.0)  # red enamel outside
 
 
+
+def _open_box(body: mujoco.MjsBody, name: str, half: tuple[float, float, float], wall: float,
+              floor: float, rgba: tuple[float, float, float, float], mass: float) -> None:
+    """A floor (half-thickness `floor`) and four walls (half-thickness `wall`) of an open
+    box of half-extents `half`, sharing `mass` by volume."""
+    hx, hy, hz = half
+    walls = {"floor": ((hx, hy, floor), (0.0, 0.0, floor)),
+             "xpos": ((wall, hy, hz), (hx - wall, 0.0, hz)),
+             "xneg": ((wall, hy, hz), (-hx + wall, 0.0, hz)),
+             "ypos": ((hx - 2 * wall, wall, hz), (0.0, hy - wall, hz)),
+             "yneg": ((hx - 2 * wall, wall, hz), (0.0, -hy + wall, hz))}
+    volume = sum(a * b * c for (a, b, c), _ in walls.values())
+    for part, (size, pos) in walls.items():
+        add_geom(body, f"{name}/{part}", "box", size, rgba,
+                 mass * size[0] * size[1] * size[2] / volume, pos=pos)
+
 def add_dutch_oven(spec: mujoco.MjSpec, name: str, radius: float = 0.105,
                    height: float = 0.10, mass: float = 2.4) -> ObjectInfo:
     """A round enamelled cast-iron Dutch oven without its lid (21 cm across, 10 cm tall,
@@ -70,15 +86,7 @@ def add_basket(spec: mujoco.MjSpec, name: str, half: tuple[float, float, float] 
     hx, hy, hz = half
     t, rim = 0.004, 0.006  # half the wall's thickness; the rim's radius
     body = free_body(spec, name)
-    walls = {"floor": ((hx, hy, 0.005), (0.0, 0.0, 0.005)),
-             "xpos": ((t, hy, hz), (hx - t, 0.0, hz)),
-             "xneg": ((t, hy, hz), (-hx + t, 0.0, hz)),
-             "ypos": ((hx - 2 * t, t, hz), (0.0, hy - t, hz)),
-             "yneg": ((hx - 2 * t, t, hz), (0.0, -hy + t, hz))}
-    volume = sum(a * b * c for (a, b, c), _ in walls.values())
-    for part, (size, pos) in walls.items():
-        add_geom(body, f"{name}/{part}", "box", size, WICKER,
-                 0.85 * mass * size[0] * size[1] * size[2] / volume, pos=pos)
+    _open_box(body, name, half, t, 0.005, WICKER, 0.85 * mass)
     top = 2 * hz
     corners = [(hx - t, hy - t), (-hx + t, hy - t), (-hx + t, -hy + t), (hx - t, -hy + t)]
     for k in range(4):
@@ -118,15 +126,7 @@ def add_shopping_basket(spec: mujoco.MjSpec, name: str, half: tuple[float, float
     hx, hy, hz = half
     t = 0.003  # half the wall's thickness
     body = free_body(spec, name)
-    walls = {"floor": ((hx, hy, t), (0.0, 0.0, t)),
-             "xpos": ((t, hy, hz), (hx - t, 0.0, hz)),
-             "xneg": ((t, hy, hz), (-hx + t, 0.0, hz)),
-             "ypos": ((hx - 2 * t, t, hz), (0.0, hy - t, hz)),
-             "yneg": ((hx - 2 * t, t, hz), (0.0, -hy + t, hz))}
-    volume = sum(a * b * c for (a, b, c), _ in walls.values())
-    for part, (size, pos) in walls.items():
-        add_geom(body, f"{name}/{part}", "box", size, BASKET_RED,
-                 mass * size[0] * size[1] * size[2] / volume, pos=pos)
+    _open_box(body, name, half, t, t, BASKET_RED, mass)
     arm, grip_r, span = 0.16, 0.011, hy + 0.006
     joints, points = {}, {}
     for k, sx in enumerate((-1, 1)):
