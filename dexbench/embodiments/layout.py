@@ -39,6 +39,12 @@ class Embodiment:
     def action_dim(self) -> int:
         return len(self.actuators)
 
+    def side_actuators(self, side: str) -> np.ndarray:
+        """Indices into `actuators` of one side's actuators (mount and hand), in action
+        order."""
+        return np.array([i for i, a in enumerate(self.actuators) if a.startswith(f"{side}/")],
+                        dtype=np.int64)
+
     def hand_actuators(self, side: str) -> np.ndarray:
         """Indices into `actuators` of one side's hand actuators, in action order."""
         return np.array([i for i, a in enumerate(self.actuators)

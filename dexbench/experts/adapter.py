@@ -74,8 +74,8 @@ class ActionAdapter:
                     for a in range(model.nu)
                     if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
         for side, layout in emb.sides.items():
-            mount = [emb.actuators.index(a) for a in emb.actuators
-                     if a.startswith(f"{side}/") and joint_of.get(a) in layout.mount_joints]
+            mount = [i for i in emb.side_actuators(side)
+                     if joint_of.get(emb.actuators[i]) in layout.mount_joints]
             joints = [joint_of[emb.actuators[i]] for i in mount]
             self._sides[side] = (layout.palm_site, joints, np.array(mount),
                                  emb.hand_actuators(side))

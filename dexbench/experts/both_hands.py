@@ -24,9 +24,7 @@ class BothHandsExpert:
                  build: Callable[[object, str], Expert]) -> None:
         self.env, self.plan = env, plan
         self.experts = {side: build(p, side) for side, p in plan.hands.items()}
-        actuators = env.embodiment.actuators
-        self._cols = {side: [i for i, a in enumerate(actuators) if a.startswith(f"{side}/")]
-                      for side in plan.hands}
+        self._cols = {side: env.embodiment.side_actuators(side) for side in plan.hands}
 
     def reset(self, env_ids: torch.Tensor) -> None:
         for expert in self.experts.values():
