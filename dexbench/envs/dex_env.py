@@ -121,8 +121,9 @@ class DexEnv:
         self.groups = tuple(g for g in preset.groups if g not in CAMERA_GROUPS)
         self.history = preset.history if history is None else history
         # Contact forces are acceleration-stage quantities: computed at the current state
-        # (not the last substep) so that a restored state observes the same forces.
-        self._acceleration = "contact" in self.groups
+        # (not the last substep) so that a restored state observes the same forces, for
+        # the `contact` group and for a success that reads per-link forces alike.
+        self._acceleration = "contact" in self.groups or bool(task.link_force_bodies)
         camera_groups = tuple(g for g in preset.groups if g in CAMERA_GROUPS)
         self.cameras: CameraObservations | None = None
         if camera_groups:

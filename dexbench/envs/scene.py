@@ -11,7 +11,7 @@ from dexbench.assets.objects import Zone
 from dexbench.embodiments.builder import SideLayout, add_embodiment, parse_embodiment
 from dexbench.embodiments.layout import Embodiment
 from dexbench.envs.arena import PhysicsOptions, build_arena
-from dexbench.envs.task_api import ZONE_CONTACTS, Task, zone_key
+from dexbench.envs.task_api import ZONE_CONTACTS, Task, link_force_key, zone_key
 
 CONTACT_FORCE_CLIP = 20.0  # N, per fingertip and axis, as the paper's contact group
 
@@ -83,6 +83,15 @@ def _zone_sensor(spec: mujoco.MjSpec, zone: Zone, side: SideLayout) -> None:
                     intprm=[1 | 16, 1, ZONE_CONTACTS])  # found + pos, reduce = mindist
 
 
+def _link_force_sensor(spec: mujoco.MjSpec, obj: str, link: str) -> None:
+    """Net force the subtree of body `obj` exerts on the hand link `link`, world frame
+    (`SceneView.link_forces` reads them)."""
+    spec.add_sensor(name=link_force_key(link, obj), type=mujoco.mjtSensor.mjSENS_CONTACT,
+                    objtype=mujoco.mjtObj.mjOBJ_XBODY, objname=obj,
+                    reftype=mujoco.mjtObj.mjOBJ_BODY, refname=link,
+                    intprm=[2, 3, 1])  # data = force, reduce = netforce, num = 1
+
+
 def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
                   backgrounds: tuple[pathlib.Path, ...] = ()) -> Scene:
     """Build and compile the scene for a task on an embodiment (`backgrounds`: image files
@@ -101,6 +110,11 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
     for zone in dict.fromkeys(task.zones):
         for side in sides:
             _zone_sensor(spec, zone, side)
+    links = [b.name for b in spec.bodies if b.first_geom() is not None
+             and b.name.startswith(tuple(f"{side}/hand/" for side in plan.sides))]
+    for obj in dict.fromkeys(task.link_force_bodies):
+        for link in links:
+            _link_force_sensor(spec, obj, link)
     model = spec.compile()
     prefixes = tuple(f"{side}/hand/" for side in plan.sides)
     hand_geoms = tuple(

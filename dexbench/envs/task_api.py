@@ -28,6 +28,12 @@ def zone_key(zone: Zone) -> str:
     return f"touch:{zone.body}:{zone.kind}:{zone.pos}:{zone.radius}:{zone.half_length}"
 
 
+def link_force_key(link: str, obj: str) -> str:
+    """The name of the contact sensor of the net force body `obj`'s subtree exerts on the
+    hand link (body) `link`."""
+    return f"{link}:link_force:{obj}"
+
+
 @dataclass
 class ResetSample:
     """Initial object state for n environments, drawn by a task.
@@ -149,6 +155,23 @@ class SceneView:
                           for a in self._ids[key]], dim=1).unflatten(1, (-1, 4))
         return data[..., 0] > 0, data[..., 1:]
 
+    def link_forces(self, obj: str, side: str) -> torch.Tensor:
+        """(N, L, 3) net contact force, world frame, that body `obj` and the bodies below
+        it exert on each link of hand `side` (its bodies with geoms, in model order): a
+        grip is judged link by link (the scene adds the sensors for the task's
+        `link_force_bodies`)."""
+        key = ("link_force", obj, side)
+        if key not in self._constants:
+            model, suffix = self._model, link_force_key("", obj)
+            adr = [int(model.sensor_adr[i]) for i in range(model.nsensor)
+                   if model.sensor(i).name.startswith(f"{side}/hand/")
+                   and model.sensor(i).name.endswith(suffix)]
+            if not adr:
+                raise KeyError(f"no link force sensors for {obj!r} on the {side} hand; is it "
+                               "one of the task's link_force_bodies?")
+            self.constant(key, torch.tensor([a + k for a in adr for k in range(3)]))
+        return self._f["sensordata"][:, self._constants[key]].unflatten(1, (-1, 3))
+
     def hand_geom_pos(self) -> torch.Tensor:
         """(N, G, 3) centres of every collision geom of every hand."""
         return self._f["geom_xpos"][:, self.hand_geom_ids]
@@ -176,6 +199,8 @@ class Task(ABC):
     contact_bodies: ClassVar[tuple[str, ...]] = ()  # fingertip contact forces: from these
     # bodies' subtrees (the `contact` group), summed per fingertip
     zones: ClassVar[tuple[Zone, ...]] = ()  # no-touch zones: the scene senses hand contacts
+    link_force_bodies: ClassVar[tuple[str, ...]] = ()  # the scene senses the contact force
+    # these bodies' subtrees exert on every hand link (`SceneView.link_forces`)
     expert: ClassVar[object | None] = None  # the scripted expert's plan (`tasks.plans`)
     deviations: ClassVar[tuple[str, ...]] = ()  # where success differs from the paper's
     tracked_bodies: ClassVar[tuple[str, ...]] = ()  # bodies whose reset pose is kept

@@ -55,7 +55,6 @@ SETTLE_SECONDS = 1.0  # closed and still before moving: lets weak fingers seat t
 LOST_DISTANCE = 0.05  # held point this far from where the hand closed on it: retry
 PLACE_TOLERANCE = 0.006  # m: a placed object is let go within this of its target
 OPEN_SECONDS = 0.4
-BACK_OFF = 0.06  # m the open hand withdraws after letting go
 CARRY_HEIGHT = 0.12  # m above the grasp: carrying height while far from the target
 CARRY_NEAR = 0.02  # m: horizontally this close to the target, the object goes down
 
@@ -198,6 +197,8 @@ class GraspExpert:
         phase = self.phase
         target_pos, target_rot = self.grasp_pos.copy(), self.grasp_rot.copy()
 
+        if self.plan.wait is not None:  # not setting out yet: planned afresh once it does
+            self.timer[(phase == Phase.APPROACH) & ~np.asarray(self.plan.wait(self.env))] = 0.0
         fresh = (phase == Phase.APPROACH) & (self.timer <= self._dt)
         if fresh.any():
             self._plan_grasp(np.flatnonzero(fresh), point, quat)
@@ -219,6 +220,8 @@ class GraspExpert:
             np.where(low[:, None], self.pos[:, :2], above[:, :2]), self.travel_z]), above)
         target_pos[approach] = waypoint[approach]
         target_rot[approach & low] = self.rot[approach & low]
+        waiting = approach & (self.timer == 0.0)
+        target_pos[waiting], target_rot[waiting] = self.pos[waiting], self.rot[waiting]
         near = np.linalg.norm(self.pos - above, axis=1) < 0.01
         self._advance(approach & ((near & (self.timer > 0.3)) | (self.timer > 3.0)),
                       Phase.DESCEND)
@@ -273,7 +276,7 @@ class GraspExpert:
         self.closure[release] = np.maximum(0.0, 1.0 - self.timer[release] / OPEN_SECONDS)
         # Backing off is away from the palm side: up for a top grasp, back for a hook.
         rising = self.timer > OPEN_SECONDS
-        back_off = self.pos - BACK_OFF * self.rot[:, :, 2]
+        back_off = self.pos - self.plan.back_off * self.rot[:, :, 2]
         target_pos[release] = np.where(rising[:, None], back_off, self.pos)[release]
         target_rot[release] = self.rot[release]
         released = release & (self.timer > 2 * OPEN_SECONDS)

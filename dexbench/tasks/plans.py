@@ -104,7 +104,11 @@ class GraspPlan:
     carried until its `goal_point` is there; with `release`, the hand then opens and
     backs off (placing), as it does whenever `let_go(env) -> (N,) bool` holds while
     carrying. `carry_high` lifts the object over the table's clutter until it is above
-    its target (off for pulling).
+    its target (off for pulling). With `wait(env) -> (N,) bool` the open hand stays
+    where it is until that holds before it sets out (a hand taking the object from the
+    other hand waits until it is set down). A hand letting go backs off `back_off` (m)
+    away from its palm side (up from a top grasp): far enough for another hand to come
+    in over the object.
     """
 
     obj: str
@@ -124,6 +128,8 @@ class GraspPlan:
     settle: float | None = None
     squeeze: float = 1.0
     standoff: float | None = None
+    wait: EnvFn | None = None
+    back_off: float = 0.06
 
 
 @dataclass(frozen=True)

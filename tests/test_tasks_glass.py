@@ -1,0 +1,99 @@
+"""PourWineGlass: each clause of the paper's rule (lift, tilt, opening not touched), one
+near miss per clause, a touch below the opening that still counts, and the glass itself
+(its rim band a zone body of its own, standing steady on its foot)."""
+
+import mujoco
+import numpy as np
+import pytest
+from test_tasks import _forward, _fresh, _ok, _place_point, _quat_about, _set_joint
+
+from dexbench.assets import glassware
+from dexbench.assets.objects import new_spec
+
+
+def _pose(env, lift: float, tilt: float) -> None:
+    """The glass tilted `tilt` deg about y, its root `lift` m above its reset height."""
+    root = env.task.objects["glass"].root
+    start = env.view.initial_body_pos[root][0].numpy().copy()
+    _place_point(env, "glass", "bottom", start + [0.0, 0.0, lift], _quat_about("y", tilt))
+    _forward(env)
+
+
+def _geom(env, name: str) -> int:
+    return env.scene.model.geom(name).id
+
+
+def _press_hand_on(env, geom: int) -> None:
+    """Move the floating wrist so that the hand's last collision geom sits on `geom`."""
+    _forward(env)
+    target = env.sim.field("geom_xpos")[0, geom].numpy()
+    tip = env.view.hand_geom_pos()[0, -1].numpy()
+    qpos = env.sim.field("qpos")[0]
+    for i, axis in enumerate("xyz"):
+        joint = f"right/wrist/{axis}"
+        _set_joint(env, joint, float(qpos[env.scene.model.joint(joint).qposadr[0]])
+                   + float(target[i] - tip[i]))
+
+
+def _touching(env, geom: int) -> bool:
+    _forward(env)
+    data = env.sim.batch.get_data(0)
+    return any(geom in (c.geom1, c.geom2) for c in data.contact[: data.ncon])
+
+
+def test_each_clause_of_the_pour_rule():
+    env = _fresh("PourWineGlass")
+    assert env.view.goal is None, "the paper pours nowhere in particular"
+    assert not _ok(env), "unsolved at reset"
+    _pose(env, lift=0.23, tilt=115.0)
+    assert _ok(env)
+    _pose(env, lift=0.18, tilt=115.0)
+    assert not _ok(env), "not lifted enough"
+    _pose(env, lift=0.23, tilt=95.0)
+    assert not _ok(env), "not tilted enough"
+    _pose(env, lift=0.23, tilt=115.0)
+    rim = _geom(env, "glass/rim_0")
+    _press_hand_on(env, rim)
+    assert _touching(env, rim)
+    assert not _ok(env), "a hand touches the opening"
+
+
+def test_glass_touched_below_its_opening_still_pours():
+    env = _fresh("PourWineGlass")
+    _pose(env, lift=0.23, tilt=115.0)
+    for name in ("glass/stem", "glass/wall4_0"):
+        _pose(env, lift=0.23, tilt=115.0)
+        _press_hand_on(env, _geom(env, name))
+        assert _touching(env, _geom(env, name)), name
+        assert _ok(env), name
+
+
+def test_rim_band_is_its_own_zone_body_at_the_top_of_the_bowl():
+    spec = new_spec()
+    info = glassware.add_wine_glass(spec, "glass")
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    (zone,) = info.zones
+    band = model.body(zone.body).id
+    assert zone.body == "glass/rim" and model.body_parentid[band] == model.body("glass").id
+    assert model.body_jntnum[band] == 0
+    geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == band]
+    assert len(geoms) == 16
+    centre = data.xpos[band] + zone.pos
+    for g in geoms:
+        rel = data.geom_xpos[g] - centre
+        assert abs(rel[2]) <= zone.half_length and np.hypot(*rel[:2]) <= zone.radius
+    assert data.xpos[band][2] == pytest.approx(info.points["rim"][1][2] - 0.01)
+    assert model.body_subtreemass[model.body("glass").id] == pytest.approx(0.17)
+
+
+def test_glass_stands_still_on_its_foot():
+    env = _fresh("PourWineGlass")
+    root = env.task.objects["glass"].root
+    start = env.view.body_pos(root)[0].clone()
+    action = env.home_action.repeat(env.num_envs, 1)
+    for _ in range(60):
+        env.step(action)
+    assert float((env.view.body_pos(root)[0] - start).norm()) < 1e-3
+    assert float(env.task._tilt(env.view)[0]) < 1.0
