@@ -10,7 +10,6 @@ import pytest
 import torch
 from test_tasks import _forward, _fresh, _ok, _set_joint
 
-from dexbench.tasks.articulation_doors import STEP_SECONDS
 from dexbench.tasks.plans import BothHandsPlan, SwingPlan
 
 DOOR, LEVER = "door/door", "door/lever"
@@ -115,7 +114,7 @@ def test_double_door_needs_both_doors_past_80_percent():
 
 def test_double_door_gap_at_most_one_second():
     env = _fresh("OpenDoubleDoor")
-    steps = round(1.0 / STEP_SECONDS)
+    steps = round(1.0 / env.view.control_dt)
     assert _double(env, 0.82, 0.82, (300, 300 + steps))
     assert not _double(env, 0.82, 0.82, (300, 300 + steps + 1))
     assert not _double(env, 0.82, 0.82, (300 + steps + 1, 300))
@@ -140,10 +139,10 @@ def test_double_door_memory_records_when_each_door_stays_past(late):
     assert env.view.memory[0, 1] == 0
     step(0.82, 0.1)
     went = int(env.view.memory[0, 1])
-    for _ in range(round(late / STEP_SECONDS) - 1):
+    for _ in range(round(late / env.view.control_dt) - 1):
         step(0.82, 0.1)
     step(0.82, 0.82)
     assert env.view.memory[0, 1] == went
     assert bool(env.task.success(env.view)[0]) == (late <= 1.0)
     assert env.task.state_obs(env.view).shape[1] > 2
-    assert np.isclose(float(env.task.state_obs(env.view)[0, -2]), late + STEP_SECONDS)
+    assert np.isclose(float(env.task.state_obs(env.view)[0, -2]), late + env.view.control_dt)

@@ -54,8 +54,9 @@ class SceneView:
 
     def __init__(self, model: mujoco.MjModel, fields: dict[str, torch.Tensor],
                  fingertip_sites: list[str], palm_sites: list[str],
-                 hand_geoms: list[int]) -> None:
+                 hand_geoms: list[int], control_dt: float) -> None:
         self._model = model
+        self.control_dt = control_dt  # s per control step: tasks that time events count steps
         self._f = fields
         device = fields["xpos"].device
         self.hand_geom_ids = torch.tensor(hand_geoms, dtype=torch.long, device=device)

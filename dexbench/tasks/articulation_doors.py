@@ -12,7 +12,6 @@ import torch
 
 from dexbench.assets import doors
 from dexbench.assets.objects import ObjectInfo
-from dexbench.envs.arena import PhysicsOptions
 from dexbench.envs.task_api import SceneView
 from dexbench.tasks.articulation_hinged import FACING_ROBOT, hook_and_swing
 from dexbench.tasks.catalog import register
@@ -48,16 +47,13 @@ class OpenDoor(ArticulatedTask):
         return {"door": doors.add_latched_door(spec, "door")}
 
 
-# Seconds per control step, at the env's default (the authors') 60 Hz control rate.
-STEP_SECONDS = 1.0 / PhysicsOptions.control_hz
-
-
 @register
 class OpenDoubleDoor(TabletopTask):
     """Both doors past `threshold` of their swing now, and the control steps at which
-    each went past it and has stayed past since at most `max_gap` s apart. The step
-    count and those two steps live in `SceneView.memory` (simulator state, as a
-    `StageTask`'s progress), so a restored state replays exactly."""
+    each went past it and has stayed past since at most `max_gap` s apart (steps times
+    the env's control period). The step count and those two steps live in
+    `SceneView.memory` (simulator state, as a `StageTask`'s progress), so a restored
+    state replays exactly."""
 
     name = "OpenDoubleDoor"
     category = "articulation"
@@ -66,7 +62,6 @@ class OpenDoubleDoor(TabletopTask):
     success_text = ("Both doors reach at least 80% of their full swing range at the same "
                     "time, and the gap between when each door first stays past that point "
                     "is no more than 1.0s.")
-    deviations = ("The gap is counted in control steps at the default 60 Hz control rate.",)
     episode_seconds = 8.0
     bimanual = True
     default_embodiment = "bimanual_floating_shadow"
@@ -98,7 +93,7 @@ class OpenDoubleDoor(TabletopTask):
     def _gap(self, view: SceneView) -> torch.Tensor:
         """(N,) seconds between the two doors' going past (inf while one is not)."""
         since = view.memory[:, 1:]
-        gap = (since[:, 0] - since[:, 1]).abs() * STEP_SECONDS
+        gap = (since[:, 0] - since[:, 1]).abs() * view.control_dt
         return torch.where((since > 0).all(dim=1), gap, torch.full_like(gap, torch.inf))
 
     def success(self, view: SceneView) -> torch.Tensor:
@@ -116,6 +111,6 @@ class OpenDoubleDoor(TabletopTask):
         """Also, per door, the seconds it has stayed past the threshold (0: not past)."""
         memory = view.memory
         held = torch.where(memory[:, 1:] > 0, memory[:, :1] - memory[:, 1:] + 1,
-                           torch.zeros_like(memory[:, 1:])) * STEP_SECONDS
+                           torch.zeros_like(memory[:, 1:])) * view.control_dt
         return torch.cat([super().state_obs(view), held.to(view.body_pos(
             self.objects["cabinet"].root).dtype)], dim=1)
