@@ -3,19 +3,11 @@ within 0.025 m of the mark, drill near-vertical, chuck and bit untouched) and, p
 a near miss that does not; the drill rests in its stand at reset."""
 
 import numpy as np
-from test_tasks import _forward, _fresh, _ok, _place_point, _point, _quat_about, _set_joint
+from test_tasks import _fresh, _ok, _place_point, _point, _quat_about
+from test_tasks_tools_new import _touch
 
 from dexbench.assets import drills
 from dexbench.tasks.registry import make_env
-
-
-def _touch(env, point) -> None:
-    """Move the floating right hand so its last collision geom's centre is at `point`."""
-    tip = env.view.hand_geom_pos()[0, -1].numpy()
-    for k, axis in enumerate("xyz"):
-        joint = f"right/wrist/{axis}"
-        _set_joint(env, joint, float(env.view.joint_pos(joint)[0]) + float((point - tip)[k]))
-    _forward(env)
 
 
 def _part(env, body: str) -> np.ndarray:

@@ -2,13 +2,10 @@
 near miss per clause, a touch below the opening that still counts, and the glass itself
 (its rim band a zone body of its own, standing steady on its foot)."""
 
-import mujoco
-import numpy as np
-import pytest
 from test_tasks import _forward, _fresh, _ok, _place_point, _quat_about, _set_joint
+from test_tasks_pour_new import _check_rim_band
 
 from dexbench.assets import glassware
-from dexbench.assets.objects import new_spec
 
 
 def _pose(env, lift: float, tilt: float) -> None:
@@ -69,23 +66,7 @@ def test_glass_touched_below_its_opening_still_pours():
 
 
 def test_rim_band_is_its_own_zone_body_at_the_top_of_the_bowl():
-    spec = new_spec()
-    info = glassware.add_wine_glass(spec, "glass")
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    (zone,) = info.zones
-    band = model.body(zone.body).id
-    assert zone.body == "glass/rim" and model.body_parentid[band] == model.body("glass").id
-    assert model.body_jntnum[band] == 0
-    geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == band]
-    assert len(geoms) == 16
-    centre = data.xpos[band] + zone.pos
-    for g in geoms:
-        rel = data.geom_xpos[g] - centre
-        assert abs(rel[2]) <= zone.half_length and np.hypot(*rel[:2]) <= zone.radius
-    assert data.xpos[band][2] == pytest.approx(info.points["rim"][1][2] - 0.01)
-    assert model.body_subtreemass[model.body("glass").id] == pytest.approx(0.17)
+    _check_rim_band(glassware.add_wine_glass, "glass", 0.17)
 
 
 def test_glass_stands_still_on_its_foot():

@@ -98,15 +98,17 @@ def test_cup_touched_below_its_rim_band_still_pours():
     assert not bool(found.any())
 
 
-def test_cup_rim_band_is_its_own_zone_body_at_the_top_of_the_wall():
+def _check_rim_band(add, name: str, mass: float) -> None:
+    """The vessel `add` builds has its opening as one zone body of 16 wall pieces, fixed
+    to the vessel, covering the top 1 cm below its `rim` point; the vessel weighs `mass`."""
     spec = new_spec()
-    info = procedural.add_cup(spec, "cup")
+    info = add(spec, name)
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     (zone,) = info.zones
     band = model.body(zone.body).id
-    assert zone.body == "cup/rim" and model.body_parentid[band] == model.body("cup").id
+    assert zone.body == f"{name}/rim" and model.body_parentid[band] == model.body(name).id
     assert model.body_jntnum[band] == 0
     geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == band]
     assert len(geoms) == 16
@@ -115,5 +117,9 @@ def test_cup_rim_band_is_its_own_zone_body_at_the_top_of_the_wall():
         rel = data.geom_xpos[g] - centre
         assert abs(rel[2]) <= zone.half_length and math.hypot(*rel[:2]) <= zone.radius
     rim = info.points["rim"][1][2]
-    assert data.xpos[band][2] == pytest.approx(rim - 0.01)  # the top 1 cm of the wall
-    assert model.body_subtreemass[model.body("cup").id] == pytest.approx(0.12)
+    assert data.xpos[band][2] == pytest.approx(rim - 0.01)
+    assert model.body_subtreemass[model.body(name).id] == pytest.approx(mass)
+
+
+def test_cup_rim_band_is_its_own_zone_body_at_the_top_of_the_wall():
+    _check_rim_band(procedural.add_cup, "cup", 0.12)
