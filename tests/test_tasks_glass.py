@@ -2,8 +2,8 @@
 near miss per clause, a touch below the opening that still counts, and the glass itself
 (its rim band a zone body of its own, standing steady on its foot)."""
 
-from test_tasks import _forward, _fresh, _ok, _place_point, _quat_about, _set_joint
-from test_tasks_pour_new import _check_rim_band
+from test_tasks import _forward, _fresh, _ok, _place_point, _quat_about
+from test_tasks_pour_new import _check_rim_band, _press_hand_on
 
 from dexbench.assets import glassware
 
@@ -18,18 +18,6 @@ def _pose(env, lift: float, tilt: float) -> None:
 
 def _geom(env, name: str) -> int:
     return env.scene.model.geom(name).id
-
-
-def _press_hand_on(env, geom: int) -> None:
-    """Move the floating wrist so that the hand's last collision geom sits on `geom`."""
-    _forward(env)
-    target = env.sim.field("geom_xpos")[0, geom].numpy()
-    tip = env.view.hand_geom_pos()[0, -1].numpy()
-    qpos = env.sim.field("qpos")[0]
-    for i, axis in enumerate("xyz"):
-        joint = f"right/wrist/{axis}"
-        _set_joint(env, joint, float(qpos[env.scene.model.joint(joint).qposadr[0]])
-                   + float(target[i] - tip[i]))
 
 
 def _touching(env, geom: int) -> bool:

@@ -110,13 +110,14 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
     for zone in dict.fromkeys(task.zones):
         for side in sides:
             _zone_sensor(spec, zone, side)
-    links = [b.name for b in spec.bodies if b.first_geom() is not None
-             and b.name.startswith(tuple(f"{side}/hand/" for side in plan.sides))]
-    for obj in dict.fromkeys(task.link_force_bodies):
-        for link in links:
-            _link_force_sensor(spec, obj, link)
-    model = spec.compile()
     prefixes = tuple(f"{side}/hand/" for side in plan.sides)
+    if task.link_force_bodies:
+        links = [b.name for b in spec.bodies
+                 if b.first_geom() is not None and b.name.startswith(prefixes)]
+        for obj in dict.fromkeys(task.link_force_bodies):
+            for link in links:
+                _link_force_sensor(spec, obj, link)
+    model = spec.compile()
     hand_geoms = tuple(
         g for g in range(model.ngeom)
         if model.body(model.geom_bodyid[g]).name.startswith(prefixes)

@@ -53,7 +53,6 @@ class OpenDrawer(ArticulatedTask):
         return {"cabinet": articulated.add_drawer_cabinet(spec, "cabinet")}
 
 
-
 @register
 class OpenLaptop(ArticulatedTask):
     name = "OpenLaptop"

@@ -178,4 +178,3 @@ class FunctionalHammerStrike(TabletopTask):
 
     def progress(self, view: SceneView) -> torch.Tensor:
         return self.driven(view) / self.depth
-
