@@ -8,7 +8,7 @@ import torch
 from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.envs.camera_obs import CROP_LO
 from dexbench.envs.observations import PRESETS
-from dexbench.envs.pointcloud import crop_mask, depth_to_world, farthest_point_sample
+from dexbench.envs.pointcloud import crop_mask, depth_to_world, farthest_point_sample, thin_evenly
 from dexbench.tasks.registry import TASKS, make_env
 
 SMALL = {"image_size": (32, 24), "num_points": 64}
@@ -138,6 +138,21 @@ def test_fps_matches_brute_force_reference():
     got = farthest_point_sample(torch.from_numpy(pts), torch.from_numpy(valid), 32)
     for b in range(3):
         assert got[b].tolist() == _fps_reference(pts[b], valid[b], 32)
+
+
+def test_thinning_keeps_every_point_that_fits_and_spaces_the_rest_evenly():
+    """Clouds with no, few, exactly `keep` and many valid points, thinned at once."""
+    rng = np.random.default_rng(1)
+    mask = np.zeros((4, 300), dtype=bool)
+    for row, count in zip(mask, (0, 7, 16, 211), strict=True):
+        row[rng.choice(300, count, replace=False)] = True
+    idx, ok = thin_evenly(torch.from_numpy(mask), 16)
+    for row, got, fits in zip(mask, idx.numpy(), ok.numpy(), strict=True):
+        valid = np.flatnonzero(row)
+        want = valid if len(valid) <= 16 else valid[np.arange(16) * (len(valid) - 1) // 15]
+        assert fits.sum() == len(want) and fits[:len(want)].all()
+        assert got[:len(want)].tolist() == want.tolist()
+        assert got.max() < 300
 
 
 def _variation_env(**kw):

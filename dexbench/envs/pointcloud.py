@@ -17,7 +17,7 @@ def depth_to_world(depth: torch.Tensor, fovy_deg: torch.Tensor, cam_pos: torch.T
     `fovy_deg` is (N,): each world may have its own field of view.
     """
     n, h, w = depth.shape
-    dtype, device = cam_pos.dtype, depth.device
+    dtype, device = torch.float32, depth.device  # as the depth images: float32 is enough
     f = (0.5 * h / torch.tan(torch.deg2rad(fovy_deg.to(dtype)) / 2))[:, None, None]
     u = torch.arange(w, dtype=dtype, device=device) + 0.5 - w / 2
     v = torch.arange(h, dtype=dtype, device=device) + 0.5 - h / 2
@@ -64,6 +64,22 @@ def farthest_point_sample(points: torch.Tensor, mask: torch.Tensor, n: int) -> t
     return chosen
 
 
+def thin_evenly(mask: torch.Tensor, keep: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """(N, keep) indices of masked points, evenly spaced among them when more than `keep`
+    are masked, and (N, keep) whether each slot holds one.
+
+    Ranks from a cumulative sum and a sorted search select the points of every cloud at
+    once, without reading the counts back to the host: one GPU sync per cloud was the
+    cost of replaying datasets to point clouds.
+    """
+    count = mask.sum(dim=1, keepdim=True)
+    rank = mask.to(torch.int64).cumsum(dim=1)
+    slot = torch.arange(keep, device=mask.device)[None]
+    want = torch.where(count > keep, slot * (count - 1) // max(keep - 1, 1), slot)
+    idx = torch.searchsorted(rank, want + 1).clamp_(max=mask.shape[1] - 1)
+    return idx, slot < count
+
+
 def sample_cloud(points: torch.Tensor, mask: torch.Tensor, n: int,
                  oversample: int = 4) -> torch.Tensor:
     """(N, n, 3) points: the masked points, thinned evenly to `oversample * n`, then FPS.
@@ -71,17 +87,7 @@ def sample_cloud(points: torch.Tensor, mask: torch.Tensor, n: int,
     Thinning by evenly spaced indices keeps the result deterministic and bounds the cost
     of farthest-point sampling whatever the image size.
     """
-    keep = oversample * n
-    rows, valid = [], []
-    for cloud, m in zip(points, mask, strict=True):
-        idx = m.nonzero().flatten()
-        if len(idx) > keep:
-            idx = idx[torch.linspace(0, len(idx) - 1, keep, device=idx.device).long()]
-        count = len(idx)
-        padded = torch.zeros(keep, dtype=torch.long, device=idx.device)
-        padded[:count] = idx
-        rows.append(cloud[padded])
-        valid.append(torch.arange(keep, device=idx.device) < count)
-    thinned, ok = torch.stack(rows), torch.stack(valid)
+    idx, ok = thin_evenly(mask, oversample * n)
+    thinned = torch.gather(points, 1, idx[..., None].expand(-1, -1, 3))
     chosen = farthest_point_sample(thinned.to(torch.float32), ok, n)
     return torch.gather(thinned, 1, chosen[..., None].expand(-1, -1, 3))
