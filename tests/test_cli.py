@@ -99,6 +99,27 @@ def test_bench_render_reports_images_per_second():
     assert result["renderer"].startswith("cpu")  # the headline is the first result
 
 
+def test_bench_train_times_the_training_loop_and_writes_run_dir():
+    """A tiny DP on synthetic frames shaped like PickCube's state observations."""
+    from dexbench.cli.bench_train import BENCH_TRAIN, bench_train_in
+
+    cfg = load_config("bench_train", ["policy=dp", "policy.unet.channels=[8,16,32]",
+                                      "policy.optim.batch_size=8", "frames=512", "steps=3",
+                                      "warmup=1", "device=cpu"])
+    result = bench_train_in(cfg, BENCH_TRAIN.folder(cfg, "t"))
+    assert result["steps_per_s_total"] > 0 and result["steps_per_s_each"] == [
+        result["steps_per_s_total"]]
+    assert result["device"] == "cpu" and result["batch_size"] == 8
+    run_dir = pathlib.Path(result["run_dir"])
+    assert json.loads((run_dir / "metrics.json").read_text())["jobs"] == 1
+
+
+def test_bench_train_rejects_no_jobs_in_one_line():
+    out = _run("bench.py", "train", "jobs=0")
+    assert out.returncode == 2 and "jobs >= 1" in out.stderr
+    assert out.stderr.strip().count("\n") == 0
+
+
 def test_snapshot_writes_a_labelled_contact_sheet():
     import numpy as np
     from PIL import Image

