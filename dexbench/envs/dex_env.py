@@ -113,7 +113,7 @@ class DexEnv:
         sites = [s for side in self.embodiment.sides.values() for s in side.fingertip_sites]
         palms = [side.palm_site for side in self.embodiment.sides.values()]
         self.view = SceneView(model, fields, sites, palms, self.scene.hand_geoms,
-                              self.control_dt)
+                              self.control_dt, self.scene.link_force_sensors)
         model_materials = [model.material(f"var/mat{i}").id for i in range(NUM_MATERIALS)]
         self.variation = Variation(self.scene, self.sim, model_materials,
                                    visual, physical or PhysicalVariation())

@@ -54,6 +54,9 @@ class Scene:
     # contact body of the task
     link_sites: tuple[str, ...]  # palm and fingertip sites with pose/velocity sensors
     hand_geoms: tuple[int, ...]  # collision geoms of every hand link
+    # (object, side) -> sensors of the force the object exerts on each of that hand's
+    # links, in model order (`SceneView.link_forces`)
+    link_force_sensors: dict[tuple[str, str], tuple[str, ...]]
 
 
 def _link_sensors(spec: mujoco.MjSpec, site: str) -> None:
@@ -83,13 +86,14 @@ def _zone_sensor(spec: mujoco.MjSpec, zone: Zone, side: SideLayout) -> None:
                     intprm=[1 | 16, 1, ZONE_CONTACTS])  # found + pos, reduce = mindist
 
 
-def _link_force_sensor(spec: mujoco.MjSpec, obj: str, link: str) -> None:
+def _link_force_sensor(spec: mujoco.MjSpec, obj: str, link: str) -> str:
     """Net force the subtree of body `obj` exerts on the hand link `link`, world frame
     (`SceneView.link_forces` reads them)."""
     spec.add_sensor(name=link_force_key(link, obj), type=mujoco.mjtSensor.mjSENS_CONTACT,
                     objtype=mujoco.mjtObj.mjOBJ_XBODY, objname=obj,
                     reftype=mujoco.mjtObj.mjOBJ_BODY, refname=link,
                     intprm=[2, 3, 1])  # data = force, reduce = netforce, num = 1
+    return link_force_key(link, obj)
 
 
 def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
@@ -111,16 +115,18 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
         for side in sides:
             _zone_sensor(spec, zone, side)
     prefixes = tuple(f"{side}/hand/" for side in plan.sides)
+    link_forces = {}
     if task.link_force_bodies:
-        links = [b.name for b in spec.bodies
-                 if b.first_geom() is not None and b.name.startswith(prefixes)]
-        for obj in dict.fromkeys(task.link_force_bodies):
-            for link in links:
-                _link_force_sensor(spec, obj, link)
+        for side, prefix in zip(plan.sides, prefixes, strict=True):
+            links = [b.name for b in spec.bodies
+                     if b.first_geom() is not None and b.name.startswith(prefix)]
+            for obj in dict.fromkeys(task.link_force_bodies):
+                link_forces[obj, side] = tuple(_link_force_sensor(spec, obj, link)
+                                               for link in links)
     model = spec.compile()
     hand_geoms = tuple(
         g for g in range(model.ngeom)
         if model.body(model.geom_bodyid[g]).name.startswith(prefixes)
         and (model.geom_contype[g] or model.geom_conaffinity[g]))
     return Scene(model, Embodiment.resolve(plan, model), options, contacts, link_sites,
-                 hand_geoms)
+                 hand_geoms, link_forces)

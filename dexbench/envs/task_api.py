@@ -9,7 +9,7 @@ the same predicate runs on the CPU and the GPU backends.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Hashable
+from collections.abc import Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -54,8 +54,11 @@ class SceneView:
 
     def __init__(self, model: mujoco.MjModel, fields: dict[str, torch.Tensor],
                  fingertip_sites: list[str], palm_sites: list[str],
-                 hand_geoms: list[int], control_dt: float) -> None:
+                 hand_geoms: list[int], control_dt: float,
+                 link_force_sensors: Mapping[tuple[str, str], Sequence[str]] | None = None,
+                 ) -> None:
         self._model = model
+        self._link_force_sensors = link_force_sensors or {}
         self.control_dt = control_dt  # s per control step: tasks that time events count steps
         self._f = fields
         device = fields["xpos"].device
@@ -163,13 +166,11 @@ class SceneView:
         `link_force_bodies`)."""
         key = ("link_force", obj, side)
         if key not in self._constants:
-            model, suffix = self._model, link_force_key("", obj)
-            adr = [int(model.sensor_adr[i]) for i in range(model.nsensor)
-                   if model.sensor(i).name.startswith(f"{side}/hand/")
-                   and model.sensor(i).name.endswith(suffix)]
-            if not adr:
+            names = self._link_force_sensors.get((obj, side))
+            if not names:
                 raise KeyError(f"no link force sensors for {obj!r} on the {side} hand; is it "
                                "one of the task's link_force_bodies?")
+            adr = [int(self._model.sensor(n).adr[0]) for n in names]
             self.constant(key, torch.tensor([a + k for a in adr for k in range(3)]))
         return self._f["sensordata"][:, self._constants[key]].unflatten(1, (-1, 3))
 
