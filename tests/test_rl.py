@@ -10,9 +10,11 @@ from dexbench.cli.config import load_config
 from dexbench.cli.rl import build_env, train
 from dexbench.policies import rl as rl_policy
 from dexbench.rl.actions import ActionMap, delta_targets
-from dexbench.rl.rewards import RewardTerms, RewardWeights
+from dexbench.rl.rewards import RewardTerms, check_terms
 from dexbench.rl.vec_env import RslVecEnv
 from dexbench.tasks.registry import make_env
+
+_DEFAULT = dict(load_config("rl", []).rl.rewards)  # conf/rl_rewards/default.yaml
 
 
 def test_delta_targets_scale_by_half_range_and_clip():
@@ -26,7 +28,7 @@ def test_delta_targets_scale_by_half_range_and_clip():
 def vec():
     cfg = load_config("rl", ["sim.backend=cpu", "num_envs=3", "sim.nthread=1"])
     env = build_env(cfg)
-    return RslVecEnv(env, ActionMap(env, "joints", 0.05), RewardWeights(), steps_per_iteration=2)
+    return RslVecEnv(env, ActionMap(env, "joints", 0.05), _DEFAULT, steps_per_iteration=2)
 
 
 def test_vec_env_observations_rewards_and_time_outs(vec):
@@ -55,7 +57,7 @@ def test_training_episodes_outlast_success_and_count_it(vec, monkeypatch):
         return obs, reward, terminated, truncated, info
 
     monkeypatch.setattr(env, "step", success_in_env_0)
-    short = RslVecEnv(env, vec.action_map, RewardWeights(), steps_per_iteration=2,
+    short = RslVecEnv(env, vec.action_map, _DEFAULT, steps_per_iteration=2,
                       episode_steps=2)
     zero = torch.zeros(3, short.num_actions)
     _, _, dones, _ = short.step(zero)
@@ -64,7 +66,7 @@ def test_training_episodes_outlast_success_and_count_it(vec, monkeypatch):
     assert dones.tolist() == [1, 1, 1] and extras["time_outs"].all()
     assert short.curve.points[-1]["success_rate"] == pytest.approx(1 / 3)
     with pytest.raises(ValueError, match="episode_steps"):
-        RslVecEnv(env, vec.action_map, RewardWeights(), 2, episode_steps=env.episode_steps + 1)
+        RslVecEnv(env, vec.action_map, _DEFAULT, 2, episode_steps=env.episode_steps + 1)
 
 
 def test_synergy_actions_move_the_mount_by_deltas_and_blend_each_hand(vec):
@@ -92,8 +94,32 @@ def test_synergy_actions_move_the_mount_by_deltas_and_blend_each_hand(vec):
         ActionMap(env, "synergy", 0.05, ("fist",))
 
 
+def test_reward_terms_come_from_the_preset_and_reject_unknown_names():
+    assert list(_DEFAULT) == ["task", "lift_when_grasping", "action_l2", "action_rate"]
+    sparse = load_config("rl", ["rl_rewards=sparse", "rl.rewards.success.weight=5"]).rl.rewards
+    assert sparse.success.weight == 5 and "task" not in sparse
+    with pytest.raises(ValueError, match="unknown reward term 'reach'"):
+        check_terms({"reach": {"weight": 1.0}})
+    with pytest.raises(ValueError, match="needs a weight"):
+        check_terms({"task": {}})
+    with pytest.raises(ValueError, match=r"no parameter \['tip'\]"):
+        check_terms({"lift_when_grasping": {"weight": 1.0, "tip": 3}})
+
+
+def test_terms_that_do_not_apply_are_left_out_and_weights_scale():
+    env = make_env("PushButton", num_envs=2, nthread=1, obs=["state", "contact"])
+    obs = env.reset()
+    zeros = torch.zeros(2, 4)
+    total, terms = RewardTerms(env, _DEFAULT)(torch.ones(2), obs, zeros + 1, zeros)
+    assert set(terms) == {"task", "action_l2", "action_rate"}  # nothing to lift
+    torch.testing.assert_close(terms["action_rate"], torch.full((2,), -0.005 * 4))
+    torch.testing.assert_close(total, 1.0 - 0.005 * 4 * 2 + torch.zeros(2))
+    _, doubled = RewardTerms(env, {"task": {"weight": 2.0}})(torch.ones(2), obs, zeros, zeros)
+    torch.testing.assert_close(doubled["task"], torch.full((2,), 2.0))
+
+
 def test_lift_tasks_get_the_grasp_term(vec):
-    _, terms = RewardTerms(vec.env, RewardWeights())(
+    _, terms = RewardTerms(vec.env, _DEFAULT)(
         torch.zeros(3), vec.env.reset(), torch.zeros(3, vec.num_actions),
         torch.zeros(3, vec.num_actions))
     assert terms["lift_when_grasping"].tolist() == [0.0, 0.0, 0.0]  # resting on the table

@@ -1,9 +1,10 @@
 """`python rl.py task=<T> embodiment=<E> num_envs=4096`: RSL-RL PPO on a batched env.
 
-Trains on the task's dense reward (plus the grasp and action terms of
-`dexbench.rl.rewards`) with the state observation groups for the actor and those plus
-`privileged` for the critic, on `sim.backend` (warp on a GPU; cpu for smoke tests:
-`sim.backend=cpu num_envs=4 rl.max_iterations=2`). Stops after `rl.max_iterations` or
+Trains on the weighted reward terms of `conf/rl_rewards/<preset>.yaml` (the task's dense
+reward plus grasp and action terms by default; `dexbench.rl.rewards`) with the state
+observation groups for the actor and those plus `privileged` for the critic, on
+`sim.backend` (warp on a GPU; cpu for smoke tests: `sim.backend=cpu num_envs=4
+rl.max_iterations=2`). Stops after `rl.max_iterations` or
 `rl.max_minutes`, whichever comes first. Writes `runs/rl/<timestamp>-<task>-<emb>/`
 (Hydra's run folder):
 config, RSL-RL checkpoints (`model_<it>.pt`) and TensorBoard logs, `policy.json` (what
@@ -38,7 +39,7 @@ from dexbench.policies.rl import META_FILE
 from dexbench.rl.actions import ActionMap
 from dexbench.rl.config import runner_config
 from dexbench.rl.curve import plot_curve
-from dexbench.rl.rewards import RewardWeights
+from dexbench.rl.rewards import check_terms
 from dexbench.rl.vec_env import ACTOR_GROUPS, CRITIC_EXTRA, RslVecEnv
 from dexbench.tasks.registry import make_env, task_class
 
@@ -95,6 +96,10 @@ def check(cfg: DictConfig, overrides: list[str]) -> None:
         raise ConfigError("rl.max_iterations must be >= 1 and rl.max_minutes > 0")
     if cfg.obs != "state":
         raise ConfigError(f"rl.py trains on state observations; got obs={cfg.obs}")
+    try:
+        check_terms(OmegaConf.to_container(rl.rewards))
+    except ValueError as err:
+        raise ConfigError(str(err)) from None
     env_kwargs(cfg)
     check_pair(task_class(cfg.task), default_embodiment(cfg))
 
@@ -115,7 +120,7 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
     torch.manual_seed(int(cfg.seed))
     env = build_env(cfg)
     run_dir = open_run_dir(out, cfg)
-    vec = RslVecEnv(env, action_map(cfg, env), RewardWeights(**rl.rewards),
+    vec = RslVecEnv(env, action_map(cfg, env), OmegaConf.to_container(rl.rewards),
                     int(rl.num_steps_per_env), episode_steps(cfg, env),
                     cfg=OmegaConf.to_container(cfg, resolve=True))
     write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")

@@ -1,9 +1,9 @@
 """Typed config nodes in Hydra's ConfigStore: the one place their defaults live.
 
 The library's own dataclasses hold the defaults (`VisualVariation`, `PhysicalVariation`,
-`PhysicsOptions`, `RewardWeights`); here each becomes a mutable schema with the same
+`PhysicsOptions`); here each becomes a mutable schema with the same
 fields, types and defaults (OmegaConf makes frozen dataclasses read-only, and overrides
-must merge into them). conf/visual/*.yaml, conf/physical/*.yaml, `sim` and `rl.rewards`
+must merge into them). conf/visual/*.yaml, conf/physical/*.yaml and `sim`
 start from these nodes and set only what differs, and Hydra checks every override's key
 and type against them.
 """
@@ -17,7 +17,6 @@ from hydra.core.config_store import ConfigStore
 
 from dexbench.envs.arena import PhysicsOptions
 from dexbench.envs.variation import PhysicalVariation, VisualVariation
-from dexbench.rl.rewards import RewardWeights
 
 
 def schema_of(cls: type, name: str, extra: tuple = ()) -> type:
@@ -35,7 +34,6 @@ SimSchema = schema_of(PhysicsOptions, "SimSchema", (
     ("backend", str, dataclasses.field(default="cpu")),  # cpu (mujoco.batch) or warp (GPU)
     ("nthread", int, dataclasses.field(default=0)),  # cpu backend threads; 0: one per core
 ))
-RewardSchema = schema_of(RewardWeights, "RewardSchema")
 
 
 def physics_options(sim) -> PhysicsOptions:
@@ -46,12 +44,11 @@ def physics_options(sim) -> PhysicsOptions:
 
 def register() -> None:
     """Store the nodes (idempotent): `visual/base`, `physical/base`, `sim_base` (package
-    `sim`) and `rl_rewards_base` (package `rl.rewards`)."""
+    `sim`)."""
     cs = ConfigStore.instance()
     cs.store(group="visual", name="base", node=VisualSchema)
     cs.store(group="physical", name="base", node=PhysicalSchema)
     cs.store(name="sim_base", package="sim", node=SimSchema)
-    cs.store(name="rl_rewards_base", package="rl.rewards", node=RewardSchema)
 
 
 register()

@@ -1,67 +1,108 @@
-"""The RL reward: the task's dense reward plus the reference's shaping terms.
+"""The RL reward: a weighted sum of named terms, listed in `conf/rl_rewards/<preset>.yaml`.
 
-The task reward (`Task.reward`) already holds reach (fingertips to the task's focus
-point), task progress and the success bonus. On top of it, for lift tasks, a bonus while
-the object is off the table and held by at least two fingertips (lift-when-grasping),
-and penalties on the squared policy action and its change between steps (action L2 and
-rate), which keep the learned motion smooth.
+A term is a function of one transition and of its own parameters, returning (N,) values,
+or None where it does not apply to the task (a lift bonus on a task with nothing to
+lift). A preset lists terms as `name: {weight: w, <param>: value}`; `default` is the
+DexVerse authors' PPO set-up: the task's dense reward (reach, progress and the success
+bonus, `Task.reward`), a bonus while the lifted object is off the table and held by at
+least two fingertips, and penalties on the squared action and its change between steps,
+which keep the learned motion smooth. `rl_rewards=<preset>` picks another preset,
+`rl.rewards.<term>.weight=...` changes a weight, `+rl.rewards.success.weight=5` adds a
+term and `~rl.rewards.<term>` drops one.
 """
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.tasks.templates import LiftTask
-
-GRASP_FORCE = 0.1  # N: a fingertip pushed by the object at least this hard holds it
-GRASP_TIPS = 2  # fingertips that must hold the object
-LIFT_MIN = 0.01  # m above the reset height
 
 
 @dataclass(frozen=True)
-class RewardWeights:
-    """Weights of the reward terms (defaults: the DexVerse authors' PPO set-up)."""
+class Transition:
+    """One batched step as the terms see it: `obs` right after the step (before any
+    reset), `action` and `prev_action` the policy's normalized actions."""
 
-    task: float = 1.0
-    lift_when_grasping: float = 0.3
-    action_l2: float = -0.005
-    action_rate: float = -0.005
+    env: DexEnv
+    task_reward: torch.Tensor
+    obs: dict[str, torch.Tensor]
+    action: torch.Tensor
+    prev_action: torch.Tensor
+
+
+def task(t: Transition) -> torch.Tensor:
+    """The task's own dense reward."""
+    return t.task_reward.float()
+
+
+def success(t: Transition) -> torch.Tensor:
+    """1 while the task's success condition holds."""
+    return t.env.task.success(t.env.view).float()
+
+
+def action_l2(t: Transition) -> torch.Tensor:
+    return t.action.square().sum(dim=1)
+
+
+def action_rate(t: Transition) -> torch.Tensor:
+    return (t.action - t.prev_action).square().sum(dim=1)
+
+
+def lift_when_grasping(t: Transition, body: str = "auto", force: float = 0.1, tips: int = 2,
+                       min_lift: float = 0.01) -> torch.Tensor | None:
+    """1 where `body` (auto: the object the task lifts, if any) is `min_lift` m above its
+    reset height and at least `tips` fingertips push on it with `force` N or more."""
+    name = getattr(t.env.task, "lifted", None) if body == "auto" else body
+    if name is None or "contact" not in t.obs:
+        return None
+    forces = t.obs["contact"].reshape(t.env.num_envs, -1, 3).norm(dim=-1)
+    held = (forces > force).sum(dim=1) >= tips
+    return (held & (t.env.task.lift(t.env.view, name) > min_lift)).float()
+
+
+TERMS: dict[str, Callable[..., torch.Tensor | None]] = {
+    f.__name__: f for f in (task, success, action_l2, action_rate, lift_when_grasping)}
+
+
+def check_terms(terms: Mapping[str, Mapping[str, Any]]) -> None:
+    """A clear error for an unknown term, a missing weight or an unknown parameter."""
+    for name, spec in terms.items():
+        if name not in TERMS:
+            raise ValueError(f"unknown reward term {name!r}; terms: {', '.join(TERMS)}")
+        if spec is None or "weight" not in spec:
+            raise ValueError(f"reward term {name!r} needs a weight (rl.rewards.{name}.weight)")
+        params = set(inspect.signature(TERMS[name]).parameters) - {"t"}
+        unknown = set(spec) - params - {"weight"}
+        if unknown:
+            raise ValueError(f"reward term {name!r} has no parameter {sorted(unknown)}; "
+                             f"parameters: {sorted(params) or 'none'}")
 
 
 class RewardTerms:
-    """Computes the weighted terms for a batch of transitions of one env."""
+    """The weighted terms of `terms` (a preset's mapping) for batches of one env."""
 
-    def __init__(self, env: DexEnv, weights: RewardWeights) -> None:
+    def __init__(self, env: DexEnv, terms: Mapping[str, Mapping[str, Any]]) -> None:
+        check_terms(terms)
         self.env = env
-        self.weights = weights
-        task = env.task
-        self._lifted = task.lifted if isinstance(task, LiftTask) else None
-
-    def _grasp_lift(self, obs: dict[str, torch.Tensor]) -> torch.Tensor | None:
-        """(N,) 1 where the lifted object is off the table and held, else 0."""
-        if self._lifted is None or "contact" not in obs:
-            return None
-        forces = obs["contact"].reshape(self.env.num_envs, -1, 3).norm(dim=-1)
-        held = (forces > GRASP_FORCE).sum(dim=1) >= GRASP_TIPS
-        lifted = self.env.task.lift(self.env.view, self._lifted) > LIFT_MIN
-        return (held & lifted).float()
+        self._terms = [(name, float(spec["weight"]), TERMS[name],
+                        {k: v for k, v in spec.items() if k != "weight"})
+                       for name, spec in terms.items()]
 
     def __call__(self, task_reward: torch.Tensor, obs: dict[str, torch.Tensor],
                  action: torch.Tensor, prev_action: torch.Tensor,
                  ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
-        """The total reward (N,) and each weighted term (N,), by name.
-
-        `obs` are the observations right after the step (before any reset), `action`
-        and `prev_action` the policy's normalized actions of this and the last step.
-        """
-        w = self.weights
-        terms = {"task": w.task * task_reward.float(),
-                 "action_l2": w.action_l2 * action.square().sum(dim=1),
-                 "action_rate": w.action_rate * (action - prev_action).square().sum(dim=1)}
-        grasp = self._grasp_lift(obs)
-        if grasp is not None:
-            terms["lift_when_grasping"] = w.lift_when_grasping * grasp
-        return torch.stack(list(terms.values())).sum(dim=0), terms
+        """The total reward (N,) and each weighted term that applies (N,), by name."""
+        t = Transition(self.env, task_reward, obs, action, prev_action)
+        out = {}
+        for name, weight, fn, params in self._terms:
+            value = fn(t, **params)
+            if value is not None:
+                out[name] = weight * value
+        total = torch.stack(list(out.values())).sum(dim=0) if out else torch.zeros_like(
+            task_reward, dtype=torch.float32)
+        return total, out

@@ -16,6 +16,7 @@ go to `curve` (success vs wall time).
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 
 import torch
 from rsl_rl.env import VecEnv
@@ -23,7 +24,7 @@ from tensordict import TensorDict
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.rl.actions import ActionMap
-from dexbench.rl.rewards import RewardTerms, RewardWeights
+from dexbench.rl.rewards import RewardTerms
 
 ACTOR_GROUPS = ("policy", "proprio", "contact", "state", "goal")
 CRITIC_EXTRA = ("privileged",)
@@ -67,7 +68,7 @@ class Curve:
 class RslVecEnv(VecEnv):
     """A `DexEnv` (built with `auto_reset=False` and the actor + critic groups) for RSL-RL."""
 
-    def __init__(self, env: DexEnv, action_map: ActionMap, weights: RewardWeights,
+    def __init__(self, env: DexEnv, action_map: ActionMap, rewards: Mapping[str, Mapping],
                  steps_per_iteration: int, episode_steps: int | None = None,
                  cfg: dict | None = None) -> None:
         if env.auto_reset:
@@ -85,7 +86,7 @@ class RslVecEnv(VecEnv):
         self.actor_groups = actor_groups(env)
         have = env.obs_shapes()
         self.critic_groups = self.actor_groups + tuple(g for g in CRITIC_EXTRA if g in have)
-        self.rewards = RewardTerms(env, weights)
+        self.rewards = RewardTerms(env, rewards)
         self._steps_per_iteration = steps_per_iteration
         self._total_steps = 0
         self._prev_action = torch.zeros(env.num_envs, action_map.dim, device=env.device)
