@@ -16,6 +16,7 @@ from dexbench.cli.app import Command, dispatch, register
 from dexbench.cli.config import env_kwargs, load_config
 from dexbench.cli.docs import write_docs
 from dexbench.cli.errors import run_cli
+from dexbench.cli.matrix import MATRIX
 from dexbench.cli.merge import merge
 from dexbench.cli.snapshot import SNAPSHOT
 from dexbench.cli.validate import VALIDATE
@@ -30,7 +31,8 @@ USAGE = """usage:
   python -m dexbench snapshot task=<Task> embodiment=<embodiment> visual=<fixed|train|test>
   python -m dexbench validate dataset=<dataset folder> [strict=true]
   python -m dexbench merge <eval run or sweep folder> ... [out=<folder>]
-  python -m dexbench split <split>   (its implemented tasks, comma-separated, for -m split_task=)"""
+  python -m dexbench split <split>   (its implemented tasks, comma-separated, for -m split_task=)
+  python -m dexbench matrix split=<split> episodes=20 jobs=<N>   (the expert on every cell)"""
 
 
 def list_tasks() -> str:
@@ -93,7 +95,7 @@ def _check_inspect(cfg: DictConfig, overrides: list[str]) -> None:
 
 
 INSPECT = register(Command("inspect", _print_inspect, _check_inspect))
-VERBS = {"inspect": INSPECT, "snapshot": SNAPSHOT, "validate": VALIDATE}
+VERBS = {"inspect": INSPECT, "snapshot": SNAPSHOT, "validate": VALIDATE, "matrix": MATRIX}
 
 
 def main(argv: list[str]) -> int:
