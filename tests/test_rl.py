@@ -3,6 +3,7 @@ and its checkpoint driving an env through the `rl` policy kind."""
 
 import json
 
+import numpy as np
 import pytest
 import torch
 
@@ -154,3 +155,44 @@ def test_rl_checkpoint_errors_say_what_to_pass(tmp_path):
         rl_policy.spec(None, {})
     with pytest.raises(rl_policy.CheckpointError, match=r"policy\.json"):
         rl_policy.spec(str(tmp_path), {})
+
+
+def test_sb3_vec_env_truncates_with_the_terminal_observation():
+    """SB3's own VecNormalize over our adapter: every episode ends by its time limit and
+    hands SB3 the observation it ended on."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from dexbench.rl.sb3_env import Sb3VecEnv
+
+    cfg = load_config("rl", ["sim.backend=cpu", "num_envs=2", "sim.nthread=1"])
+    env = build_env(cfg)
+    vec = RslVecEnv(env, ActionMap(env, "joints", 0.05), _DEFAULT, 2, episode_steps=2)
+    venv = VecNormalize(Sb3VecEnv(vec), norm_reward=False)
+    first = venv.reset()
+    assert first.shape == (2, venv.observation_space.shape[0])
+    zeros = np.zeros((2, venv.action_space.shape[0]), dtype=np.float32)
+    _, _, dones, _ = venv.step(zeros)
+    assert not dones.any()
+    obs, reward, dones, infos = venv.step(zeros)
+    assert dones.all() and reward.shape == (2,) and obs.shape == first.shape
+    for info in infos:
+        assert info["TimeLimit.truncated"]
+        assert info["terminal_observation"].shape == first.shape[1:]
+
+
+@pytest.mark.parametrize("algo", ["sac", "sb3_ppo"])
+def test_sb3_smoke_run_and_its_policy_in_the_evaluator(tmp_path, monkeypatch, algo):
+    monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
+    result = train(["sim.backend=cpu", "num_envs=4", "sim.nthread=1", "rl.max_iterations=2",
+                    f"rl.algo={algo}", "rl.sb3.batch_size=16", "rl.sb3.net_arch=[16]",
+                    "rl.sb3.learning_starts=8", "rl.sb3.buffer_size=1000",
+                    "rl.sb3.gradient_steps=1"])
+    run = tmp_path / "rl" / next(p.name for p in (tmp_path / "rl").iterdir())
+    assert result["algo"] == algo and result["env_steps"] == 2 * 8 * 4
+    assert {"model.zip", "vecnormalize.pkl", "policy.json", "curve.png",
+            "metrics.json"} <= {p.name for p in run.iterdir()}
+    env = make_env("PickCube", num_envs=2, obs=list(rl_policy.spec(str(run), {}).obs),
+                   nthread=1)
+    action = rl_policy.build(str(run), env, "cpu", {}).act(env.reset())
+    assert action.shape == (2, env.action_dim)
+    assert (action >= env.action_low).all() and (action <= env.action_high).all()

@@ -33,6 +33,7 @@ from dexbench.cli.config import (
     open_run_dir,
     write_atomic,
 )
+from dexbench.cli.rl_sb3 import train_sb3
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.scene import check_pair
 from dexbench.policies.rl import META_FILE
@@ -40,6 +41,7 @@ from dexbench.rl.actions import ActionMap
 from dexbench.rl.config import runner_config
 from dexbench.rl.curve import plot_curve
 from dexbench.rl.rewards import check_terms
+from dexbench.rl.sb3_env import ALGOS
 from dexbench.rl.vec_env import ACTOR_GROUPS, CRITIC_EXTRA, RslVecEnv
 from dexbench.tasks.registry import make_env, task_class
 
@@ -87,7 +89,8 @@ def _meta(cfg: DictConfig, env: DexEnv, vec: RslVecEnv) -> dict:
             "actor_dim": int(obs["actor"].shape[1]), "critic_dim": int(obs["critic"].shape[1]),
             **vec.action_map.describe(),
             "network": OmegaConf.to_container(cfg.rl.network, resolve=True),
-            "control_dt": env.control_dt, "sim_backend": str(cfg.sim.backend)}
+            "control_dt": env.control_dt, "sim_backend": str(cfg.sim.backend),
+            "algo": str(cfg.rl.algo)}
 
 
 def check(cfg: DictConfig, overrides: list[str]) -> None:
@@ -96,6 +99,9 @@ def check(cfg: DictConfig, overrides: list[str]) -> None:
         raise ConfigError("rl.max_iterations must be >= 1 and rl.max_minutes > 0")
     if cfg.obs != "state":
         raise ConfigError(f"rl.py trains on state observations; got obs={cfg.obs}")
+    if rl.algo not in ("ppo", *ALGOS):
+        raise ConfigError(f"rl.algo={rl.algo}: choose ppo (RSL-RL), {', '.join(ALGOS)} "
+                          "(Stable-Baselines3)")
     try:
         check_terms(OmegaConf.to_container(rl.rewards))
     except ValueError as err:
@@ -124,6 +130,10 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
                     int(rl.num_steps_per_env), episode_steps(cfg, env),
                     cfg=OmegaConf.to_container(cfg, resolve=True))
     write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")
+    if rl.algo != "ppo":
+        result = train_sb3(cfg, vec, run_dir, _device(cfg, env))
+        write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
+        return result
     # RSL-RL's per-iteration console report goes to a file; the console shows a bar.
     runner_log = open(run_dir / "rsl_rl.log", "w")  # noqa: SIM115  (closed below)
     with contextlib.redirect_stdout(runner_log):

@@ -1,4 +1,5 @@
-"""`policy=rl`: a PPO actor trained by `python rl.py`, run deterministically (its mean).
+"""`policy=rl`: a policy trained by `python rl.py`, run deterministically: RSL-RL PPO's
+actor mean, or a Stable-Baselines3 model (`rl.algo=sac|sb3_ppo`) with its normalizer.
 
 The checkpoint is a training run folder (its newest `model_<it>.pt`) or one
 `model_<it>.pt` in such a folder; `policy.json` beside it names the task, embodiment,
@@ -21,6 +22,7 @@ from tensordict import TensorDict
 from dexbench.envs.dex_env import DexEnv
 from dexbench.policies.common.protocol import PolicySpec
 from dexbench.rl.actions import ActionMap
+from dexbench.rl.sb3_env import MODEL_FILE, load_sb3
 
 META_FILE = "policy.json"
 
@@ -39,7 +41,12 @@ def resolve(checkpoint: str | None) -> tuple[pathlib.Path, dict]:
     if not meta_path.is_file():
         raise CheckpointError(f"{run} has no {META_FILE}: pass a folder written by rl.py "
                               "or a model_<it>.pt inside one")
-    if path.is_dir():
+    algo = json.loads(meta_path.read_text()).get("algo", "ppo")
+    if algo != "ppo":  # Stable-Baselines3: one model.zip per run
+        path = run / MODEL_FILE
+        if not path.is_file():
+            raise CheckpointError(f"{run} holds no {MODEL_FILE} yet")
+    elif path.is_dir():
         models = sorted(run.glob("model_*.pt"),
                         key=lambda p: int(re.findall(r"\d+", p.stem)[-1]))
         if not models:
@@ -81,7 +88,11 @@ class RlPolicy:
         self._groups = tuple(meta["actor_groups"])
         self._map = ActionMap.from_meta(env, meta)
         self._device = device
-        self._actor = load_actor(model_path, meta, device)
+        self._algo = meta.get("algo", "ppo")
+        if self._algo == "ppo":
+            self._actor = load_actor(model_path, meta, device)
+        else:
+            self._sb3, self._norm = load_sb3(model_path.parent, self._algo, device)
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Stateless: the last targets come back in the `policy` observation group."""
@@ -89,7 +100,12 @@ class RlPolicy:
     @torch.no_grad()
     def act(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
         x = torch.cat([obs[g].float() for g in self._groups], dim=1).to(self._device)
-        action = self._actor(TensorDict({"actor": x}, batch_size=[len(x)]))
+        if self._algo == "ppo":
+            action = self._actor(TensorDict({"actor": x}, batch_size=[len(x)]))
+        else:  # SB3's own normalization and deterministic prediction
+            act, _ = self._sb3.predict(self._norm.normalize_obs(x.cpu().numpy()),
+                                       deterministic=True)
+            action = torch.as_tensor(act, dtype=torch.float32).clamp(-1.0, 1.0)
         return self._map.targets(obs["policy"].to(self._map.device), action)
 
 

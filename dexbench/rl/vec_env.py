@@ -124,7 +124,9 @@ class RslVecEnv(VecEnv):
         self.curve.add(done, self._solved, reward)
         self._prev_action = action.clone()
         ids = done.nonzero().flatten()
+        final = None
         if len(ids):
+            final = self._pack(obs)["actor"][ids]  # what bootstrapping a time-out needs
             obs = env.reset(ids)
             self._prev_action[ids] = 0.0
             self._solved[ids] = False
@@ -134,5 +136,5 @@ class RslVecEnv(VecEnv):
             self.curve.close_iteration(self._total_steps * self.num_envs)
         log = {f"/reward/{k}": v.mean() for k, v in terms.items()}
         log["/sim_warnings"] = info["sim_warnings"].float().mean()
-        extras = {"time_outs": done, "log": log}
+        extras = {"time_outs": done, "log": log, "final_actor": final}
         return self._pack(obs), reward, done.long(), extras
