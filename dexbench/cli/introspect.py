@@ -18,6 +18,7 @@ from dexbench.cli.docs import write_docs
 from dexbench.cli.errors import run_cli
 from dexbench.cli.matrix import MATRIX
 from dexbench.cli.merge import merge
+from dexbench.cli.serve import SERVE
 from dexbench.cli.snapshot import SNAPSHOT
 from dexbench.cli.validate import VALIDATE
 from dexbench.embodiments.builder import embodiment_names, parse_embodiment
@@ -30,6 +31,7 @@ USAGE = """usage:
   python -m dexbench docs             (regenerates docs/tasks.md)
   python -m dexbench snapshot task=<Task> embodiment=<embodiment> visual=<fixed|train|test>
   python -m dexbench validate dataset=<dataset folder> [strict=true]
+  python -m dexbench serve policy=<dp|dp3|rl> checkpoint=<path> [host=0.0.0.0] [port=8000]
   python -m dexbench merge <eval run or sweep folder> ... [out=<folder>]
   python -m dexbench split <split>   (its implemented tasks, comma-separated, for -m split_task=)
   python -m dexbench matrix split=<split> episodes=20 jobs=<N>   (the expert on every cell)"""
@@ -95,7 +97,8 @@ def _check_inspect(cfg: DictConfig, overrides: list[str]) -> None:
 
 
 INSPECT = register(Command("inspect", _print_inspect, _check_inspect))
-VERBS = {"inspect": INSPECT, "snapshot": SNAPSHOT, "validate": VALIDATE, "matrix": MATRIX}
+VERBS = {"inspect": INSPECT, "snapshot": SNAPSHOT, "validate": VALIDATE, "matrix": MATRIX,
+         "serve": SERVE}
 
 
 def main(argv: list[str]) -> int:
