@@ -61,15 +61,23 @@ def palm_and_finger_sites(env: DexEnv, side: str) -> tuple[int, list[int]]:
 
 
 class ActionAdapter:
-    """Solves mount IK per env (warm-started from the last solution) and blends fingers."""
+    """Solves mount IK per env (warm-started from the last solution) and blends fingers.
 
-    def __init__(self, env: DexEnv) -> None:
+    With `commanded_hand` the IK places the palm as if the hand's own joints (a wrist
+    between the mount and the palm: the Shadow hand's) stood at their commanded targets,
+    not where they are measured: a heavy held object swings a weak wrist, and a mount
+    that takes out each swing drives it further (the object is flung out of the grip).
+    """
+
+    def __init__(self, env: DexEnv, commanded_hand: bool = False) -> None:
         self.env = env
+        self.commanded_hand = commanded_hand
         model = env.scene.model
         self.model = model
         emb = env.embodiment
         self._scratch = mujoco.MjData(model)
         self._sides = {}
+        self._hand_joints: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         joint_of = {model.actuator(a).name: model.joint(model.actuator_trnid[a, 0]).name
                     for a in range(model.nu)
                     if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
@@ -79,6 +87,13 @@ class ActionAdapter:
             joints = [joint_of[emb.actuators[i]] for i in mount]
             self._sides[side] = (layout.palm_site, joints, np.array(mount),
                                  emb.hand_actuators(side))
+            # The hand's joint-driven actuators: (action index, qpos address, gear).
+            held = [i for i in emb.hand_actuators(side) if emb.actuators[i] in joint_of]
+            self._hand_joints[side] = (
+                np.array(held, dtype=int),
+                np.array([model.joint(joint_of[emb.actuators[i]]).qposadr[0] for i in held],
+                         dtype=int),
+                np.array([model.actuator(emb.actuators[i]).gear[0] for i in held]))
         self._poses = emb.poses
         self._solution: dict[str, np.ndarray] = {}
 
@@ -110,14 +125,17 @@ class ActionAdapter:
             qadr = np.array([model.joint(j).qposadr[0] for j in joints])
             if side not in self._solution:
                 self._solution[side] = qpos[:, qadr].copy()
+            opened, closed = self._poses["open"][hand], self._poses[cmd.synergy][hand]
+            c = np.clip(cmd.closure, 0.0, 1.0)[:, None]
+            out[:, hand] = opened + c * (closed - opened)
+            held, held_adr, gear = self._hand_joints[side]
             for i in range(n):
                 data.qpos[:] = qpos[i]
                 data.qpos[qadr] = self._solution[side][i]
+                if self.commanded_hand:
+                    data.qpos[held_adr] = out[i, held] / gear
                 q, _ = solve_site_pose(model, data, site, joints, cmd.pos[i], cmd.rot[i],
                                        iterations=IK_ITERATIONS)
                 self._solution[side][i] = q
             out[:, mount] = self._solution[side]
-            opened, closed = self._poses["open"][hand], self._poses[cmd.synergy][hand]
-            c = np.clip(cmd.closure, 0.0, 1.0)[:, None]
-            out[:, hand] = opened + c * (closed - opened)
         return torch.as_tensor(out, device=self.env.device)

@@ -142,7 +142,7 @@ class GraspExpert:
 
     def __init__(self, env: DexEnv, plan: GraspPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
-        self.adapter = ActionAdapter(env)
+        self.adapter = ActionAdapter(env, commanded_hand=plan.commanded_hand)
         self.synergy = squeezed(self.adapter, env, plan.synergy, plan.squeeze)
         self.offset = np.asarray(env.embodiment.hand.grasp_offset) + np.asarray(plan.shift)
         objects = env.task.objects

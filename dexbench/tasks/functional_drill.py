@@ -71,12 +71,13 @@ class FunctionalDrillApply(TabletopTask):
     # mass, the index finger next to the housing, the grip 1 cm nearer the palm than the
     # hammer's handle (by trial: 1 cm either way, or the grasp 1.5 cm along the grip,
     # holds the drill less often); squeezed, as the hammer's grip: the 0.95 kg drill
-    # hangs from the fingers. The floating Shadow hand still loses it in over half the
-    # episodes (on an arm far less often): the grip tips and slides along itself in the
-    # fingers while carried.
+    # hangs from the fingers. The IK takes the Shadow hand's weak wrist as commanded:
+    # the carried drill swings it (some 0.5 rad either way), and a mount turned to take
+    # out each swing drove it further until the drill rolled out of the fingers (over
+    # half the episodes on the floating hand, a third on an arm).
     expert = GraspPlan("drill", point="grip", shift=(0.03, 0.0, -0.035), yaw="body",
                        yaw_offset=math.pi / 2, squeeze=2.0, target=_drill_target,
-                       goal_point="tip")
+                       goal_point="tip", commanded_hand=True)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"drill": drills.add_drill(spec, "drill"),

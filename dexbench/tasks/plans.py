@@ -108,7 +108,9 @@ class GraspPlan:
     where it is until that holds before it sets out (a hand taking the object from the
     other hand waits until it is set down). A hand letting go backs off `back_off` (m)
     away from its palm side (up from a top grasp): far enough for another hand to come
-    in over the object.
+    in over the object. With `commanded_hand` the mount's IK takes the hand's own joints
+    (a wrist) at their commanded targets, not as measured (`ActionAdapter`): a heavy
+    tool swings a weak wrist, and chasing each swing with the mount flings it out.
     """
 
     obj: str
@@ -130,6 +132,7 @@ class GraspPlan:
     standoff: float | None = None
     wait: EnvFn | None = None
     back_off: float = 0.06
+    commanded_hand: bool = False
 
 
 @dataclass(frozen=True)
