@@ -13,7 +13,9 @@ run again. `python eval.py task=<Task> policy=expert` evaluates one task;
 observation preset (a checkpoint's own; `state` for the expert): `obs=` may only repeat
 it. With `-m`, each job is one run; `+split=<name> split_task=A,B,...` sweeps a split's
 tasks as separate jobs (`python -m dexbench split <name>` prints them) and
-`python -m dexbench merge <sweep folder>` joins their results. The logic lives in
+`python -m dexbench merge <sweep folder>` joins their results. `wandb.enabled=true`
+(conf/wandb/: offline by default, under `wandb/` in the run folder) logs the finished
+run's table, chart, videos and overall success to W&B. The logic lives in
 `dexbench/eval/session.py`; this module turns a config into an `EvalSpec`.
 """
 
@@ -42,6 +44,7 @@ from dexbench.envs.scene import check_pair
 from dexbench.eval.merge import RESULTS_FILE
 from dexbench.eval.plan import TaskPlan, plan_task
 from dexbench.eval.session import (
+    CHART_FILE,
     EvalError,
     EvalSpec,
     Video,
@@ -54,12 +57,15 @@ from dexbench.eval.session import (
     plan_tasks,
 )
 from dexbench.eval.session import run as run_eval
+from dexbench.eval.tables import CSV_COLUMNS
 from dexbench.eval.throughput import episodes_per_minute, model_module, untrained_checkpoint
 from dexbench.policies.common.protocol import PolicySpec
+from dexbench.policies.common.run_log import finish_wandb, start_wandb, wandb_missing
 from dexbench.policies.registry import KINDS, WITHOUT_CHECKPOINT
 from dexbench.tasks.registry import TASKS, task_class
 
-RUNTIME_KEYS = ("num_envs", "device", "progress", "sim.nthread", "skip_missing")
+RUNTIME_KEYS = ("num_envs", "device", "progress", "sim.nthread", "skip_missing",
+                "wandb.enabled", "wandb.mode", "wandb.project")
 TRAINERS = {"rl": "python rl.py task=<Task>"}  # what writes a kind's checkpoints, if not train.py
 
 __all__ = ["EvalError", "bench_eval", "eval_config", "evaluate", "main", "plan_tasks",
@@ -187,6 +193,9 @@ def check(cfg: DictConfig, overrides: list[str]) -> Prepared:
     """Everything that can be wrong, before the run folder exists; a named or resumed run
     must match what it holds."""
     cfg = eval_config(cfg, overrides)
+    missing = wandb_missing(_wandb(cfg))
+    if missing:
+        raise EvalError(missing)
     spec = spec_of(cfg)
     plans, skipped = plan_tasks(spec, _obs(cfg))
     layout, leaf = run_dir(cfg)
@@ -207,6 +216,31 @@ def _config(cfg: DictConfig) -> dict:
     return OmegaConf.to_container(cfg, resolve=True)
 
 
+def _wandb(cfg: DictConfig) -> dict | None:
+    """The `wandb:` block (a run stored before it existed has none)."""
+    block = cfg.get("wandb")
+    return None if block is None else OmegaConf.to_container(block, resolve=True)
+
+
+def log_wandb(cfg: DictConfig, run_dir: pathlib.Path, summary: dict) -> None:
+    """A finished run to W&B, when `wandb.enabled`: the results table, the category chart,
+    the episode videos and the overall success (its summary)."""
+    run = start_wandb(run_dir, _config(cfg), _wandb(cfg), "eval")
+    if run is None:
+        return
+    import wandb
+
+    rows = [[t[c] for c in CSV_COLUMNS] for t in summary["tasks"]]
+    media: dict = {"eval/results": wandb.Table(columns=list(CSV_COLUMNS), data=rows)}
+    if (run_dir / CHART_FILE).exists():
+        media["eval/success_by_category"] = wandb.Image(str(run_dir / CHART_FILE))
+    for video in sorted(run_dir.glob("videos/*/*.mp4")):
+        media[f"eval/videos/{video.parent.name}/{video.stem}"] = wandb.Video(str(video))
+    run.log(media)
+    finish_wandb(run, {"overall_success": summary["overall"], "episodes": summary["episodes"],
+                       **{f"success/{t['task']}": t["success_rate"] for t in summary["tasks"]}})
+
+
 def run(cfg: DictConfig, prepared: Prepared, out: pathlib.Path) -> int:
     spec = prepared.spec
     run_dir = open_run(spec, out, _config(prepared.cfg))
@@ -215,6 +249,7 @@ def run(cfg: DictConfig, prepared: Prepared, out: pathlib.Path) -> int:
         print(f"\ninterrupted: finished episodes are kept in {run_dir}/episodes.jsonl; "
               f"continue with `python eval.py resume={run_dir}`")
         return code
+    log_wandb(prepared.cfg, run_dir, summary)
     print((run_dir / "results.md").read_text())
     print(json.dumps({"overall": summary["overall"], "episodes": summary["episodes"],
                       "complete": summary["complete"], "run_dir": str(run_dir),

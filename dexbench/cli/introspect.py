@@ -1,4 +1,4 @@
-"""`python -m dexbench list|inspect|docs|snapshot|validate|merge|split ...`.
+"""`python -m dexbench list|inspect|docs|snapshot|validate|merge|split|cloud ...`.
 
 `inspect`, `snapshot` and `validate` are Hydra mains (`--help`, `--cfg job`, ...) picked by
 the verb; `list`, `docs`, `merge` and `split` take plain arguments.
@@ -13,6 +13,7 @@ import sys
 from omegaconf import DictConfig
 
 from dexbench.cli.app import Command, dispatch, register
+from dexbench.cli.cloud import CLOUD
 from dexbench.cli.config import env_kwargs, load_config
 from dexbench.cli.docs import write_docs
 from dexbench.cli.errors import run_cli
@@ -32,6 +33,8 @@ USAGE = """usage:
   python -m dexbench snapshot task=<Task> embodiment=<embodiment> visual=<fixed|train|test>
   python -m dexbench validate dataset=<dataset folder> [strict=true]
   python -m dexbench serve policy=<dp|dp3|rl> checkpoint=<path> [host=0.0.0.0] [port=8000]
+  python -m dexbench cloud task=<Task> embodiment=<embodiment> [seed=0] out=<file>.ply [view=true]
+  python -m dexbench cloud dataset=<folder with point clouds> episode=0 frame=10 out=<file>.ply
   python -m dexbench merge <eval run or sweep folder> ... [out=<folder>]
   python -m dexbench split <split>   (its implemented tasks, comma-separated, for -m split_task=)
   python -m dexbench matrix split=<split> episodes=20 jobs=<N>   (the expert on every cell)"""
@@ -98,7 +101,7 @@ def _check_inspect(cfg: DictConfig, overrides: list[str]) -> None:
 
 INSPECT = register(Command("inspect", _print_inspect, _check_inspect))
 VERBS = {"inspect": INSPECT, "snapshot": SNAPSHOT, "validate": VALIDATE, "matrix": MATRIX,
-         "serve": SERVE}
+         "serve": SERVE, "cloud": CLOUD}
 
 
 def main(argv: list[str]) -> int:

@@ -9,7 +9,9 @@ rl.max_iterations=2`). Stops after `rl.max_iterations` or
 (Hydra's run folder):
 config, RSL-RL checkpoints (`model_<it>.pt`) and TensorBoard logs, `policy.json` (what
 `python eval.py policy=rl checkpoint=<folder>` needs), `curve.jsonl` and `curve.png`
-(success of finished training episodes vs wall time) and `metrics.json`.
+(success of finished training episodes vs wall time) and `metrics.json`; with
+`wandb.enabled=true` (conf/wandb/: offline by default) each curve point goes to W&B too,
+under `wandb/` in the run folder.
 """
 
 from __future__ import annotations
@@ -36,6 +38,12 @@ from dexbench.cli.config import (
 from dexbench.cli.rl_sb3 import train_sb3
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.scene import check_pair
+from dexbench.policies.common.run_log import (
+    finish_wandb,
+    log_curve,
+    start_wandb,
+    wandb_missing,
+)
 from dexbench.policies.rl import META_FILE
 from dexbench.rl.actions import ActionMap
 from dexbench.rl.config import runner_config
@@ -106,6 +114,9 @@ def check(cfg: DictConfig, overrides: list[str]) -> None:
         check_terms(OmegaConf.to_container(rl.rewards))
     except ValueError as err:
         raise ConfigError(str(err)) from None
+    missing = wandb_missing(OmegaConf.to_container(cfg.wandb))
+    if missing:
+        raise ConfigError(missing)
     env_kwargs(cfg)
     check_pair(task_class(cfg.task), default_embodiment(cfg))
 
@@ -130,9 +141,12 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
                     int(rl.num_steps_per_env), episode_steps(cfg, env),
                     cfg=OmegaConf.to_container(cfg, resolve=True))
     write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")
+    wandb_run = start_wandb(run_dir, OmegaConf.to_container(cfg, resolve=True),
+                            OmegaConf.to_container(cfg.wandb), "rl")
     if rl.algo != "ppo":
-        result = train_sb3(cfg, vec, run_dir, _device(cfg, env))
+        result = train_sb3(cfg, vec, run_dir, _device(cfg, env), wandb_run)
         write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
+        finish_wandb(wandb_run, result)
         return result
     # RSL-RL's per-iteration console report goes to a file; the console shows a bar.
     runner_log = open(run_dir / "rsl_rl.log", "w")  # noqa: SIM115  (closed below)
@@ -154,6 +168,7 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
         new = vec.curve.points[done:]
         with open(curve_file, "a") as f:
             f.writelines(json.dumps(p) + "\n" for p in new)
+        log_curve(wandb_run, new)
         done += chunk
         bar.update(chunk)
         last = [p["success_rate"] for p in new if p["success_rate"] is not None]
@@ -172,6 +187,7 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
               "final_success_rate": finished[-1]["success_rate"] if finished else None,
               "checkpoint": str(_latest_model(run_dir)), "run_dir": str(run_dir)}
     write_atomic(run_dir / "metrics.json", json.dumps(result, indent=2) + "\n")
+    finish_wandb(wandb_run, result)
     return result
 
 

@@ -12,24 +12,28 @@ from __future__ import annotations
 import json
 import pathlib
 import time
+from typing import Any
 
 from omegaconf import DictConfig, OmegaConf
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 from tqdm import tqdm
 
+from dexbench.policies.common.run_log import log_curve
 from dexbench.rl.curve import plot_curve
 from dexbench.rl.sb3_env import ALGOS, MODEL_FILE, NORM_FILE, Sb3VecEnv
 from dexbench.rl.vec_env import RslVecEnv
 
 
 class _Progress(BaseCallback):
-    """Appends the curve's new points, moves the bar, and stops at the time budget."""
+    """Appends the curve's new points (and logs them to the W&B run, if any), moves the
+    bar, and stops at the time budget."""
 
     def __init__(self, vec: RslVecEnv, curve_file: pathlib.Path, bar: tqdm,
-                 budget_s: float) -> None:
+                 budget_s: float, wandb_run: Any = None) -> None:
         super().__init__()
         self.vec, self.curve_file, self.bar, self.budget_s = vec, curve_file, bar, budget_s
+        self.wandb_run = wandb_run
         self.start, self.written = time.perf_counter(), 0
 
     def _on_step(self) -> bool:
@@ -37,6 +41,7 @@ class _Progress(BaseCallback):
         if new:
             with open(self.curve_file, "a") as f:
                 f.writelines(json.dumps(p) + "\n" for p in new)
+            log_curve(self.wandb_run, new)
             self.written += len(new)
             self.bar.update(len(new))
             last = [p["success_rate"] for p in new if p["success_rate"] is not None]
@@ -61,8 +66,10 @@ def _model(cfg: DictConfig, venv: VecNormalize, run_dir: pathlib.Path, device: s
                             **common)
 
 
-def train_sb3(cfg: DictConfig, vec: RslVecEnv, run_dir: pathlib.Path, device: str) -> dict:
-    """Train, save, plot; the result as `rl.py` prints it."""
+def train_sb3(cfg: DictConfig, vec: RslVecEnv, run_dir: pathlib.Path, device: str,
+              wandb_run: Any = None) -> dict:
+    """Train, save, plot (curve points also to `wandb_run`); the result as `rl.py` prints
+    it."""
     rl, env = cfg.rl, vec.env
     venv = VecNormalize(Sb3VecEnv(vec), norm_obs=True, norm_reward=False,
                         gamma=float(rl.ppo.gamma))
@@ -70,7 +77,8 @@ def train_sb3(cfg: DictConfig, vec: RslVecEnv, run_dir: pathlib.Path, device: st
     steps = int(rl.max_iterations) * int(rl.num_steps_per_env) * env.num_envs
     label = f"{rl.algo} {env.task.name} x{env.num_envs}"
     bar = tqdm(total=int(rl.max_iterations), desc=label, unit="it")
-    progress = _Progress(vec, run_dir / "curve.jsonl", bar, 60.0 * float(rl.max_minutes))
+    progress = _Progress(vec, run_dir / "curve.jsonl", bar, 60.0 * float(rl.max_minutes),
+                         wandb_run)
     model.learn(steps, callback=progress, progress_bar=False)
     bar.close()
     model.save(run_dir / MODEL_FILE)

@@ -1,6 +1,7 @@
 """Training metrics to CSV (always), TensorBoard (when installed) and W&B (when enabled).
 
-W&B runs offline unless told otherwise, so training never needs an account or network.
+W&B runs offline unless told otherwise, so training never needs an account or network;
+rl.py and eval.py start theirs here too (`start_wandb`), from the same `wandb:` block.
 """
 
 from __future__ import annotations
@@ -11,6 +12,49 @@ import pathlib
 from typing import Any
 
 FIELDS = ("epoch", "step", "train_loss", "val_loss", "lr", "ema_decay", "elapsed_s")
+CURVE_KEYS = ("success_rate", "mean_reward", "env_steps", "wall_s", "episodes")
+WANDB_MISSING = "wandb.enabled=true needs `pip install wandb`"
+
+
+def wandb_missing(settings: dict[str, Any] | None) -> str | None:
+    """Why W&B cannot log as `settings` (the config's `wandb:` block) ask; None: it can."""
+    if settings and settings.get("enabled") and importlib.util.find_spec("wandb") is None:
+        return WANDB_MISSING
+    return None
+
+
+def start_wandb(run_dir: pathlib.Path, config: dict[str, Any],
+                settings: dict[str, Any] | None, job_type: str) -> Any:
+    """The W&B run of train.py, rl.py or eval.py when `settings.enabled`, else None.
+
+    Offline by default, written under `run_dir/wandb/`, so a run needs no account.
+    """
+    if not settings or not settings.get("enabled"):
+        return None
+    try:
+        import wandb as wandb_module
+    except ImportError:
+        raise ImportError(WANDB_MISSING) from None
+    return wandb_module.init(project=settings.get("project", "dexbench"),
+                             mode=settings.get("mode", "offline"), dir=str(run_dir),
+                             config=config, job_type=job_type)
+
+
+def log_curve(run: Any, points: list[dict[str, Any]]) -> None:
+    """rl.py's curve points (`dexbench/rl/vec_env.py`) as `rl/<key>` at their iteration."""
+    if run is None:
+        return
+    for point in points:
+        run.log({f"rl/{k}": point[k] for k in CURVE_KEYS if point.get(k) is not None},
+                step=int(point["iteration"]))
+
+
+def finish_wandb(run: Any, summary: dict[str, Any]) -> None:
+    """Record the run's plain results (numbers and strings) as its summary and close it."""
+    if run is None:
+        return
+    run.summary.update({k: v for k, v in summary.items() if isinstance(v, int | float | str)})
+    run.finish()
 
 
 class RunLog:
@@ -23,15 +67,7 @@ class RunLog:
         if importlib.util.find_spec("tensorboard") is not None:
             from torch.utils.tensorboard import SummaryWriter
             self._tb = SummaryWriter(log_dir=str(run_dir / "tensorboard"))
-        self._wandb = None
-        if wandb and wandb.get("enabled"):
-            try:
-                import wandb as wandb_module
-            except ImportError:
-                raise ImportError("wandb.enabled=true needs `pip install wandb`") from None
-            self._wandb = wandb_module.init(project=wandb.get("project", "dexbench"),
-                                            mode=wandb.get("mode", "offline"),
-                                            dir=str(run_dir), config=config)
+        self._wandb = start_wandb(run_dir, config, wandb, "train")
 
     def scalar(self, name: str, value: float, step: int) -> None:
         """A per-step curve (TensorBoard and W&B only)."""
