@@ -22,6 +22,22 @@ class HandSide:
 
 
 @dataclass(frozen=True)
+class RetargetSpec:
+    """How human hand keypoints (21, MediaPipe/MANO order) drive this hand in teleoperation
+    (`dexbench.teleop.retarget`).
+
+    `tips`: the human keypoint each fingertip body (thumb first) follows. `scale`: robot
+    over human hand size, here this hand's middle finger (knuckle joint to fingertip
+    site, open model) over a human's 8.5 cm. The human wrist lands `scale` x 9.5 cm (a
+    human's wrist-to-knuckle) behind the middle knuckle, and each fingertip goes where
+    the human's offset from the wrist, times `scale`, puts it (in the hand frame H).
+    """
+
+    tips: tuple[int, ...] = (4, 8, 12, 16, 20)
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
 class HandSpec:
     """A dexterous hand.
 
@@ -48,6 +64,7 @@ class HandSpec:
     best turns from square to the fingers, for `power` to hold it against a heavy end's
     twist: the fingers' lengths and spread differ per hand, so the line they wrap firmest
     does too. Searched on GraspPan's handle (0.1 rad steps); 0: not searched."""
+    retarget: RetargetSpec = RetargetSpec()
 
 
 def _shadow_side(p: str) -> HandSide:
@@ -106,6 +123,7 @@ def _wuji_side(side: str) -> HandSide:
 HANDS: dict[str, HandSpec] = {
     "shadow": HandSpec(
         name="shadow",
+        retarget=RetargetSpec(scale=1.0),
         grasp_offset=(0.095, -0.013, 0.06),
         collection="shadow_hand",
         sides={"right": _shadow_side("rh"), "left": _shadow_side("lh")},
@@ -150,6 +168,7 @@ HANDS: dict[str, HandSpec] = {
     ),
     "allegro": HandSpec(
         name="allegro",
+        retarget=RetargetSpec(tips=(4, 8, 12, 16), scale=1.58),
         grasp_offset=(0.065, 0.016, 0.027),
         collection="wonik_allegro",
         sides={"right": _allegro_side("right_hand"), "left": _allegro_side("left_hand")},
@@ -194,6 +213,7 @@ HANDS: dict[str, HandSpec] = {
     ),
     "leap": HandSpec(
         name="leap",
+        retarget=RetargetSpec(tips=(4, 8, 12, 16), scale=1.38),
         grasp_offset=(0.02, -0.035, 0.069),
         collection="leap_hand",
         sides={"right": _leap_side("right_hand"), "left": _leap_side("left_hand")},
@@ -246,6 +266,7 @@ HANDS: dict[str, HandSpec] = {
     ),
     "sharpa": HandSpec(
         name="sharpa",
+        retarget=RetargetSpec(scale=1.07),
         grasp_offset=(0.097, -0.001, 0.0675),
         bar_yaw=-0.4,
         collection="sharpa_wave",
@@ -282,6 +303,9 @@ HANDS: dict[str, HandSpec] = {
     ),
     "inspire": HandSpec(
         name="inspire",
+        # Short fingers on a long palm: scaled by its wrist-to-middle-tip (15.7 cm) over a
+        # human's 18 cm instead of by finger length (which gives 0.61).
+        retarget=RetargetSpec(scale=0.87),
         grasp_offset=(0.108, -0.015, 0.049),
         bar_yaw=0.4,
         collection="inspire_hand",
@@ -312,6 +336,7 @@ HANDS: dict[str, HandSpec] = {
     ),
     "wuji": HandSpec(
         name="wuji",
+        retarget=RetargetSpec(scale=1.0),
         grasp_offset=(0.105, -0.022, 0.03),
         collection="wuji_hand",
         sides={"right": _wuji_side("right"), "left": _wuji_side("left")},

@@ -1,0 +1,1 @@
+"""Teleoperation: human hand keypoints retargeted to any embodiment's joint targets."""
