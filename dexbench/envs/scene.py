@@ -11,7 +11,7 @@ from dexbench.assets.objects import Zone
 from dexbench.embodiments.builder import SideLayout, add_embodiment, parse_embodiment
 from dexbench.embodiments.layout import Embodiment
 from dexbench.envs.arena import PhysicsOptions, build_arena
-from dexbench.envs.task_api import ZONE_CONTACTS, Task, link_force_key, zone_key
+from dexbench.envs.task_api import ZONE_CONTACTS, Task, link_force_key, touch_key, zone_key
 
 CONTACT_FORCE_CLIP = 20.0  # N, per fingertip and axis, as the paper's contact group
 
@@ -96,6 +96,14 @@ def _link_force_sensor(spec: mujoco.MjSpec, obj: str, link: str) -> str:
     return link_force_key(link, obj)
 
 
+def _touch_sensor(spec: mujoco.MjSpec, a: str, b: str) -> None:
+    """Whether the subtrees of bodies `a` and `b` touch (`SceneView.touching`)."""
+    spec.add_sensor(name=touch_key(a, b), type=mujoco.mjtSensor.mjSENS_CONTACT,
+                    objtype=mujoco.mjtObj.mjOBJ_XBODY, objname=a,
+                    reftype=mujoco.mjtObj.mjOBJ_XBODY, refname=b,
+                    intprm=[1, 1, 1])  # data = found, reduce = mindist, num = 1
+
+
 def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
                   backgrounds: tuple[pathlib.Path, ...] = ()) -> Scene:
     """Build and compile the scene for a task on an embodiment (`backgrounds`: image files
@@ -123,6 +131,8 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
             for obj in dict.fromkeys(task.link_force_bodies):
                 link_forces[obj, side] = tuple(_link_force_sensor(spec, obj, link)
                                                for link in links)
+    for a, b in dict.fromkeys(task.touch_pairs):
+        _touch_sensor(spec, a, b)
     model = spec.compile()
     hand_geoms = tuple(
         g for g in range(model.ngeom)

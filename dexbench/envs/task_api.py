@@ -28,6 +28,11 @@ def zone_key(zone: Zone) -> str:
     return f"touch:{zone.body}:{zone.kind}:{zone.pos}:{zone.radius}:{zone.half_length}"
 
 
+def touch_key(a: str, b: str) -> str:
+    """The name of the contact sensor of whether bodies `a`'s and `b`'s subtrees touch."""
+    return f"touching:{a}:{b}"
+
+
 def link_force_key(link: str, obj: str) -> str:
     """The name of the contact sensor of the net force body `obj`'s subtree exerts on the
     hand link (body) `link`."""
@@ -174,6 +179,18 @@ class SceneView:
             self.constant(key, torch.tensor([a + k for a in adr for k in range(3)]))
         return self._f["sensordata"][:, self._constants[key]].unflatten(1, (-1, 3))
 
+    def touching(self, a: str, b: str) -> torch.Tensor:
+        """(N,) whether the subtrees of bodies `a` and `b` are in contact (the scene adds
+        a sensor for each of the task's `touch_pairs`)."""
+        key = ("touching", touch_key(a, b))
+        if key not in self._ids:
+            try:
+                self._ids[key] = int(self._model.sensor(touch_key(a, b)).adr[0])
+            except KeyError:
+                raise KeyError(f"no contact sensor for {a!r} and {b!r}; is the pair one of "
+                               "the task's touch_pairs?") from None
+        return self._f["sensordata"][:, self._ids[key]] > 0
+
     def hand_geom_pos(self) -> torch.Tensor:
         """(N, G, 3) centres of every collision geom of every hand."""
         return self._f["geom_xpos"][:, self.hand_geom_ids]
@@ -203,6 +220,8 @@ class Task(ABC):
     zones: ClassVar[tuple[Zone, ...]] = ()  # no-touch zones: the scene senses hand contacts
     link_force_bodies: ClassVar[tuple[str, ...]] = ()  # the scene senses the contact force
     # these bodies' subtrees exert on every hand link (`SceneView.link_forces`)
+    touch_pairs: ClassVar[tuple[tuple[str, str], ...]] = ()  # the scene senses whether
+    # these bodies' subtrees touch (`SceneView.touching`)
     expert: ClassVar[object | None] = None  # the scripted expert's plan (`tasks.plans`)
     deviations: ClassVar[tuple[str, ...]] = ()  # where success differs from the paper's
     tracked_bodies: ClassVar[tuple[str, ...]] = ()  # bodies whose reset pose is kept

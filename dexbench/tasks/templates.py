@@ -373,9 +373,14 @@ class HoldActuateTask(TabletopTask):
 # h_addon: the paper names it but gives no value, and the authors' code checks only the
 # primary task, so this one value for every variant is ours: 0.15 m, the lowest lift
 # threshold among the paper's single-object tasks (GraspKettle), clear of the table.
+# Parked on top of the primary's object (the microwave is 0.28 m tall, the cabinet
+# 0.20 m, the door's frame 0.44 m) an add-on would rise that far without being held, so
+# it must also touch none of the primary's objects.
 ADDON_LIFT = 0.15
-ADDON_NOTE = ("Not in the paper: h_addon = 0.15 m is ours (the paper gives no value), "
-              "and the add-on must move slower than 0.5 m/s.")
+ADDON_NOTE = ("Not in the paper: h_addon = 0.15 m is ours (the paper gives no value); the "
+              "add-on must move slower than 0.5 m/s and touch none of the primary's "
+              "objects (parked on top of the microwave, 0.28 m tall, it would rise 0.15 m "
+              "without being held).")
 
 
 class MultiGoalTask(TabletopTask):
@@ -383,9 +388,10 @@ class MultiGoalTask(TabletopTask):
 
     Success needs, at the same time, the primary task's own success condition and the
     add-on object lifted at least `ADDON_LIFT` above its reset height (and moving slower
-    than `MAX_SPEED`, as every lift). Only the add-on's objects come along: its goal and
-    goal marker belong to its own task, not to this one. (The released DexVerse code
-    checks only the primary; this follows the paper.)
+    than `MAX_SPEED`, as every lift, and touching none of the primary's objects). Only the
+    add-on's objects come along: its goal and goal marker belong to its own task, not to
+    this one. (The released DexVerse code checks only the primary; this follows the
+    paper.)
     """
 
     category = "multigoal"
@@ -429,9 +435,22 @@ class MultiGoalTask(TabletopTask):
     def sample_goal(self, rngs: list[np.random.Generator]) -> np.ndarray | None:
         return self.primary.sample_goal(rngs)
 
+    @property
+    def touch_pairs(self) -> tuple[tuple[str, str], ...]:  # type: ignore[override]
+        addon = self.objects[self.addon_object].root
+        return tuple((addon, info.root) for info in self.primary.objects.values())
+
+    def parked(self, view: SceneView) -> torch.Tensor:
+        """(N,) the add-on touches one of the primary's objects (rests on it)."""
+        pairs = iter(self.touch_pairs)
+        out = view.touching(*next(pairs))
+        for a, b in pairs:
+            out = out | view.touching(a, b)
+        return out
+
     def addon_lifted(self, view: SceneView) -> torch.Tensor:
-        return (self.lift(view, self.addon_object) >= ADDON_LIFT) & self.slow(
-            view, self.addon_object)
+        return ((self.lift(view, self.addon_object) >= ADDON_LIFT)
+                & self.slow(view, self.addon_object) & ~self.parked(view))
 
     def success(self, view: SceneView) -> torch.Tensor:
         return self.primary.success(view) & self.addon_lifted(view)
