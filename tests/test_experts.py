@@ -74,10 +74,15 @@ def test_pick_expert_on_arm_mounted_leap(embodiment, seed):
     assert solved >= 3, f"PickCube on {embodiment}: expert solved {solved}/4"
 
 
-def _solved(task: str, embodiment: str | None, seed: int, enough: int) -> int:
-    """Episodes of 4 envs the task's expert solves, stopping once `enough` are."""
+def _solved(task: str, embodiment: str | None, seed: int, enough: int,
+            keys: np.ndarray | None = None) -> int:
+    """Episodes of 4 envs the task's expert solves, stopping once `enough` are (`keys`:
+    the episodes' reset keys; default: the env's own)."""
     env = make_env(task, embodiment, num_envs=4, seed=seed)
-    env.reset()
+    if keys is None:
+        env.reset()
+    else:
+        env.reset_to(np.arange(4), keys)
     expert = make_expert(env)
     expert.reset(torch.arange(4))
     solved = torch.zeros(4, dtype=torch.bool)

@@ -3,13 +3,12 @@ within 0.025 m of the mark, drill near-vertical, chuck and bit untouched) and, p
 a near miss that does not; the drill rests in its stand at reset."""
 
 import numpy as np
-import torch
+from test_experts import _solved
 from test_tasks import _fresh, _ok, _place_point, _point, _quat_about
 from test_tasks_tools_new import _touch
 
 from dexbench.assets import drills
 from dexbench.eval.seeds import eval_keys
-from dexbench.experts import make_expert
 from dexbench.tasks.registry import make_env
 
 
@@ -62,14 +61,5 @@ def test_drill_expert_holds_the_drill_on_the_floating_shadow_hand():
     """The IK takes the Shadow hand's weak wrist as commanded (`commanded_hand`): chasing
     its swings with the mount flung the carried drill out of the fingers in over half
     the episodes; these 4 (evaluation episodes the expert failed without it) succeed."""
-    env = make_env("FunctionalDrillApply", num_envs=4, seed=0, nthread=1)
-    env.reset_to(np.arange(4), eval_keys(0, [0, 3, 6, 7]))
-    expert = make_expert(env)
-    expert.reset(torch.arange(4))
-    solved = torch.zeros(4, dtype=torch.bool)
-    for _ in range(env.episode_steps):
-        _, _, terminated, _, _ = env.step(expert.act())
-        solved |= terminated
-        if solved.all():
-            break
-    assert int(solved.sum()) >= 3, f"expert solved {int(solved.sum())}/4"
+    solved = _solved("FunctionalDrillApply", None, 0, 4, keys=eval_keys(0, [0, 3, 6, 7]))
+    assert solved >= 3, f"expert solved {solved}/4"

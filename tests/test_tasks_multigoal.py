@@ -13,6 +13,7 @@ import torch
 import yaml
 from test_tasks import _forward, _place_point, _set_joint, _set_pose
 
+from dexbench.experts.grasp import _subtree
 from dexbench.tasks.multigoal import ADDONS, PRIMARIES, VARIANTS
 from dexbench.tasks.registry import TASKS, make_env
 
@@ -35,14 +36,6 @@ def _env(name: str):
 def test_every_split_variant_is_registered_and_generated():
     assert len(SPLIT) == 39 and set(SPLIT) == set(VARIANTS)
     assert all(TASKS[n] is VARIANTS[n] for n in SPLIT)
-
-
-def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
-    out = {root}
-    for body in range(root + 1, model.nbody):
-        if model.body_parentid[body] in out:
-            out.add(body)
-    return out
 
 
 def _swept_boxes(env, obj: str, steps: int = 9) -> list[tuple[np.ndarray, np.ndarray]]:
