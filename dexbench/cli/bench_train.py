@@ -8,6 +8,7 @@ rate is what a sweep gets. Sizing a GPU sweep (how many epochs fit a time cap) s
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import multiprocessing
 import pathlib
@@ -19,7 +20,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from dexbench.cli.app import Command, register
 from dexbench.cli.config import ConfigError, env_kwargs, open_run_dir, write_atomic
-from dexbench.cli.train import model_module
+from dexbench.cli.train import model_module, settings_of
 from dexbench.policies.common.demos import Demos
 from dexbench.policies.common.runner import resolve_device
 from dexbench.policies.common.training import TrainSettings, fit_normalizer, train_policy
@@ -43,15 +44,10 @@ def synthetic_demos(cfg: DictConfig, obs: str) -> Demos:
 
 
 def _settings(cfg: DictConfig, steps: int) -> TrainSettings:
-    pol = cfg.policy
-    return TrainSettings(
-        epochs=10**6, batch_size=int(pol.optim.batch_size), lr=float(pol.optim.lr),
-        weight_decay=float(pol.optim.weight_decay), betas=tuple(pol.optim.betas),
-        grad_clip=float(pol.optim.grad_clip), warmup_steps=int(pol.optim.warmup_steps),
-        ema_max_decay=float(pol.ema.max_decay), ema_power=float(pol.ema.power),
-        n_obs_steps=int(pol.n_obs_steps), horizon=int(pol.horizon), val_fraction=0.0,
-        max_steps=steps, save_every=10**6, seed=int(cfg.seed), amp=bool(cfg.amp),
-        progress=False)
+    """train.py's settings for the policy, run for `steps` steps with nothing held out,
+    no checkpoint writes and no progress bar."""
+    return dataclasses.replace(settings_of(cfg), epochs=10**6, max_steps=steps,
+                               val_fraction=0.0, save_every=10**6, progress=False)
 
 
 class _NoLog:

@@ -35,12 +35,11 @@ from dexbench.cli.config import (
     open_run_dir,
     write_atomic,
 )
-from dexbench.cli.rl_sb3 import train_sb3
+from dexbench.cli.rl_sb3 import record_curve, train_sb3
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.scene import check_pair
 from dexbench.policies.common.run_log import (
     finish_wandb,
-    log_curve,
     start_wandb,
     wandb_missing,
 )
@@ -165,15 +164,9 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
                          and done == 0)
         # learn() stops at its last iteration's number; the next chunk continues after it
         runner.current_learning_iteration += 1
-        new = vec.curve.points[done:]
-        with open(curve_file, "a") as f:
-            f.writelines(json.dumps(p) + "\n" for p in new)
-        log_curve(wandb_run, new)
+        if new := vec.curve.points[done:]:
+            record_curve(new, curve_file, wandb_run, bar)
         done += chunk
-        bar.update(chunk)
-        last = [p["success_rate"] for p in new if p["success_rate"] is not None]
-        bar.set_postfix(success=f"{last[-1]:.2f}" if last else "-",
-                        reward=f"{new[-1]['mean_reward']:.3f}" if new else "-")
     bar.close()
     runner_log.close()
     plot_curve(vec.curve.points, run_dir / "curve.png",

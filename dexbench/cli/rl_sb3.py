@@ -25,6 +25,19 @@ from dexbench.rl.sb3_env import ALGOS, MODEL_FILE, NORM_FILE, Sb3VecEnv
 from dexbench.rl.vec_env import RslVecEnv
 
 
+def record_curve(new: list[dict], curve_file: pathlib.Path, wandb_run: Any,
+                 bar: tqdm) -> None:
+    """New curve points (one per iteration, PPO's or SB3's) to `curve.jsonl`, W&B and the
+    progress bar."""
+    with open(curve_file, "a") as f:
+        f.writelines(json.dumps(p) + "\n" for p in new)
+    log_curve(wandb_run, new)
+    bar.update(len(new))
+    last = [p["success_rate"] for p in new if p["success_rate"] is not None]
+    bar.set_postfix(success=f"{last[-1]:.2f}" if last else "-",
+                    reward=f"{new[-1]['mean_reward']:.3f}")
+
+
 class _Progress(BaseCallback):
     """Appends the curve's new points (and logs them to the W&B run, if any), moves the
     bar, and stops at the time budget."""
@@ -39,14 +52,8 @@ class _Progress(BaseCallback):
     def _on_step(self) -> bool:
         new = self.vec.curve.points[self.written:]
         if new:
-            with open(self.curve_file, "a") as f:
-                f.writelines(json.dumps(p) + "\n" for p in new)
-            log_curve(self.wandb_run, new)
+            record_curve(new, self.curve_file, self.wandb_run, self.bar)
             self.written += len(new)
-            self.bar.update(len(new))
-            last = [p["success_rate"] for p in new if p["success_rate"] is not None]
-            if last:
-                self.bar.set_postfix(success=f"{last[-1]:.2f}")
         return time.perf_counter() - self.start < self.budget_s
 
 
