@@ -10,6 +10,7 @@ import pathlib
 
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
 from dexbench.cli import matrix as matrix_cli
 from dexbench.cli.config import ConfigError, runs_root
@@ -174,5 +175,18 @@ def test_resume_skips_complete_cells(monkeypatch: pytest.MonkeyPatch,
     monkeypatch.setattr(matrix_cli, "run_cell", never)
     assert matrix_cli.main(argv) == 0
     assert "1 cells, 1 complete, 0 to evaluate" in capsys.readouterr().out
+    # A config library that hands sequences back as tuples (omegaconf 2.4 for structured
+    # configs) still matches the lists matrix.json stored: the folder resumes.
+    plain = OmegaConf.to_container
+
+    def tuples(value: object) -> object:
+        if isinstance(value, list):
+            return tuple(tuples(v) for v in value)
+        return {k: tuples(v) for k, v in value.items()} if isinstance(value, dict) else value
+
+    monkeypatch.setattr(OmegaConf, "to_container", lambda *a, **k: tuples(plain(*a, **k)))
+    assert matrix_cli.main(argv) == 0
+    assert "1 cells, 1 complete, 0 to evaluate" in capsys.readouterr().out
+    monkeypatch.setattr(OmegaConf, "to_container", plain)
     with pytest.raises(ConfigError, match="other settings \\(episodes\\)"):
         matrix_cli.main([*argv[:2], "episodes=2"])

@@ -28,6 +28,7 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from dexbench.cli.app import Command, register
 from dexbench.cli.config import ConfigError, load_config, positive_int, runs_root
+from dexbench.data.meta import as_json
 from dexbench.embodiments.builder import parse_embodiment
 from dexbench.eval import matrix
 from dexbench.eval.feasibility import reference_embodiment
@@ -93,13 +94,15 @@ def base_config(cfg: DictConfig) -> dict:
 
 
 def identity(cfg: DictConfig, split: str) -> dict:
-    """What fixes every cell's outcome: a matrix folder holds one identity."""
+    """What fixes every cell's outcome: a matrix folder holds one identity (as JSON
+    stores it, so that a tuple from a structured config compares equal to its stored list)."""
     sim = {k: v for k, v in OmegaConf.to_container(cfg.sim, resolve=True).items()
            if k != "nthread"}
-    return {"split": split, "episodes": int(cfg.episodes), "seed": int(cfg.seed), "sim": sim,
-            **{k: OmegaConf.to_container(cfg[k], resolve=True) for k in ("visual",
-                                                                           "physical")},
-            "probe_episodes": int(cfg.feasibility.probe_episodes)}
+    return as_json({"split": split, "episodes": int(cfg.episodes), "seed": int(cfg.seed),
+                    "sim": sim,
+                    **{k: OmegaConf.to_container(cfg[k], resolve=True)
+                       for k in ("visual", "physical")},
+                    "probe_episodes": int(cfg.feasibility.probe_episodes)})
 
 
 def check(cfg: DictConfig, overrides: list[str]) -> Prepared:

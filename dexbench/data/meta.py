@@ -14,6 +14,7 @@ import importlib.metadata
 import json
 import pathlib
 import platform
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -36,14 +37,14 @@ class DatasetError(ValueError):
     """A dataset that is missing, corrupt, incomplete or recorded with other code."""
 
 
-def _plain(obj):
+def as_json(obj: Any) -> Any:
     """JSON's view of a value (tuples become lists), to compare stored and current."""
     return json.loads(json.dumps(obj))
 
 
 def env_config(env: DexEnv) -> dict:
     """The settings that decide what an env simulates (not cameras, batch or seed)."""
-    return _plain({
+    return as_json({
         "task": env.task.name,
         "embodiment": env.embodiment.name,
         "physics": dataclasses.asdict(env.physics),

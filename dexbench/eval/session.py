@@ -24,6 +24,7 @@ import torch
 import yaml
 from tqdm import tqdm
 
+from dexbench.data.meta import as_json
 from dexbench.envs.dex_env import DexEnv
 from dexbench.eval.metrics import summarize
 from dexbench.eval.plan import TaskPlan, plan_task
@@ -161,7 +162,7 @@ def check_run_dir(spec: EvalSpec, run_dir: pathlib.Path) -> None:
     if not run_file.exists():
         return
     stored = json.loads(run_file.read_text())["identity"]
-    identity = json.loads(json.dumps(spec.identity()))
+    identity = as_json(spec.identity())
     changed = sorted(k for k in {*stored, *identity} if stored.get(k) != identity.get(k))
     if changed:
         raise EvalError(f"{run_dir} holds a run with other settings ({', '.join(changed)}); "
