@@ -120,7 +120,9 @@ def env_kwargs(cfg: DictConfig) -> dict:
 
 
 def cloud_device_of(cfg: DictConfig) -> str | None:
-    """`camera.cloud_device`: null (the renderer's device), cpu or cuda, checked."""
+    """`camera.cloud_device`: null (the renderer's device), cpu or cuda, checked; in a
+    `-m` sweep on several GPUs, cuda is the job's own GPU (as `device=auto`), so that
+    parallel replays and evaluations do not all compute their clouds on the first."""
     device = cfg.camera.get("cloud_device")
     if device is None:
         return None
@@ -131,6 +133,9 @@ def cloud_device_of(cfg: DictConfig) -> str | None:
     if device == "cuda" and not torch.cuda.is_available():
         raise ConfigError("camera.cloud_device=cuda but no CUDA device is visible: "
                           "use camera.cloud_device=null")
+    if device == "cuda":
+        own = job_device("auto")
+        return "cuda" if own == "auto" else own
     return device
 
 

@@ -35,7 +35,8 @@ def crop_mask(points: torch.Tensor, lo: tuple[float, float, float],
     return ((points >= lo_t) & (points <= hi_t)).all(dim=-1)
 
 
-def farthest_point_sample(points: torch.Tensor, mask: torch.Tensor, n: int) -> torch.Tensor:
+def farthest_point_sample(points: torch.Tensor, mask: torch.Tensor, n: int,
+                          kernel: bool = True) -> torch.Tensor:
     """(N, n) indices chosen by farthest-point sampling among the masked points.
 
     Starts from the first valid point of each cloud (deterministic). A cloud with no
@@ -43,9 +44,16 @@ def farthest_point_sample(points: torch.Tensor, mask: torch.Tensor, n: int) -> t
     points once all have been taken. Masked points start at distance -1 and stay there
     (distances are never negative); the coordinates are laid out one plane per axis and
     updated in place, which makes the loop several times faster on the CPU than
-    per-point vectors, with the same sums in the same order.
+    per-point vectors, with the same sums in the same order. On CUDA (float32, with
+    `kernel`) the loop runs as one Triton kernel (`fps_triton`): same rule, a fraction of
+    the time.
     """
     batch, count, _ = points.shape
+    if kernel and points.is_cuda and points.dtype == torch.float32 and count > 0:
+        from dexbench.envs import fps_triton
+
+        if count <= fps_triton.MAX_POINTS:
+            return fps_triton.farthest_point_sample_triton(points, mask, n)
     rows = torch.arange(batch, device=points.device)
     planes = points.permute(2, 0, 1).contiguous()
     dist = torch.full((batch, count), float("inf"), dtype=points.dtype, device=points.device)
