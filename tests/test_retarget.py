@@ -15,7 +15,13 @@ import pytest
 
 from dexbench.embodiments.hands import HANDS
 from dexbench.tasks.registry import make_env
-from dexbench.teleop.retarget import NUM_KEYPOINTS, HandFrame, Retargeter, wrist_pose
+from dexbench.teleop.retarget import (
+    NUM_KEYPOINTS,
+    HandFrame,
+    Retargeter,
+    robot_as_human,
+    wrist_pose,
+)
 from dexbench.teleop.sources import FileSource, write_keypoints
 
 TIP_TOLERANCE = 0.005  # m
@@ -62,17 +68,7 @@ def human_frame(retargeter: Retargeter, qpos: np.ndarray,
     palm = model.site(layout.palm_site).id
     pos, rot = data.site_xpos[palm], data.site_xmat[palm].reshape(3, 3)
     tips = np.array([data.site_xpos[model.site(s).id] for s in layout.fingertip_sites])
-    wrist = pos + rot @ retargeter.wrist[side]
-    human_tips = wrist + (tips - wrist) / spec.scale
-    keypoints = np.repeat(wrist[None], NUM_KEYPOINTS, axis=0)
-    for finger in range(5):
-        tip = human_tips[min(finger, len(human_tips) - 1)]
-        for k in range(4):
-            keypoints[1 + 4 * finger + k] = wrist + (k + 1) / 4 * (tip - wrist)
-    keypoints[list(spec.tips)] = human_tips
-    pose = np.eye(4)
-    pose[:3, :3], pose[:3, 3] = rot, wrist
-    return HandFrame(keypoints, pose), tips
+    return robot_as_human(pos, rot, tips, retargeter.wrist[side], spec), tips
 
 
 @pytest.mark.parametrize("hand", list(HANDS))

@@ -42,13 +42,14 @@ def dataset_dir(cfg: DictConfig, task: str, embodiment: str) -> pathlib.Path:
     return runs_root() / "datasets" / task / embodiment / (cfg.name or f"seed{cfg.seed}")
 
 
-def _settings(cfg: DictConfig) -> CollectSettings:
+def collect_settings(cfg: DictConfig) -> CollectSettings:
+    """The recording settings of a collect (or teleop) config, checked."""
     num_demos, post = int(cfg.num_demos), int(cfg.post_success_steps)
     attempts = int(cfg.max_attempts) if cfg.max_attempts is not None else 5 * num_demos
     if num_demos < 1 or post < 0 or attempts < num_demos:
         raise ConfigError(f"need num_demos >= 1, post_success_steps >= 0 and max_attempts >= "
                           f"num_demos; got {num_demos}, {post}, {attempts}")
-    return CollectSettings(num_demos, attempts, post)
+    return CollectSettings(num_demos, attempts, post, bool(cfg.get("keep_failures", False)))
 
 
 def _checked(cfg: DictConfig) -> tuple[dict, CollectSettings]:
@@ -58,7 +59,7 @@ def _checked(cfg: DictConfig) -> tuple[dict, CollectSettings]:
         raise ConfigError("collect records simulator states and state observations; render "
                           f"obs={cfg.obs} afterwards with `python replay.py dataset=<folder> "
                           f"obs={cfg.obs}`")
-    return kwargs, _settings(cfg)
+    return kwargs, collect_settings(cfg)
 
 
 def collect_one(cfg: DictConfig, make_expert: ExpertFactory, on_episode=None) -> dict:

@@ -1,12 +1,14 @@
 """Run an expert on a batched env and keep its successful episodes as a dataset.
 
 An episode ends `post_success_steps` control steps after success first holds (kept), at
-the time limit without success (a time-out) or at a simulator warning (a failure);
-finished envs go on with their next episode key. Each kept episode is written whole to
-`<out>.partial/` at once, with the counters, so an interrupted collection resumes where
-it stopped: no key is used twice and an episode cut short is dropped. When `num_demos`
-are kept (or `max_attempts` episodes have finished) the LeRobot dataset is built in the
-partial folder and moved to `<out>` in one rename.
+the time limit without success (a time-out), when the expert says it has nothing more
+to do (an optional `ended()`: a teleoperation take that ran out; a time-out too) or at a
+simulator warning (a failure); finished envs go on with their next episode key. With
+`keep_failures` time-outs are kept as well (success step -1), for review and tests.
+Each kept episode is written whole to `<out>.partial/` at once, with the counters, so an
+interrupted collection resumes where it stopped: no key is used twice and an episode cut
+short is dropped. When `num_demos` are kept (or `max_attempts` episodes have finished)
+the LeRobot dataset is built in the partial folder and moved to `<out>` in one rename.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ class CollectSettings:
     num_demos: int
     max_attempts: int  # finished episodes, kept or not, before giving up
     post_success_steps: int = 10
+    keep_failures: bool = False  # keep time-outs too (teleoperation review, tests)
 
 
 @dataclass
@@ -137,6 +140,8 @@ def collect(env: DexEnv, expert: Expert, out: pathlib.Path, settings: CollectSet
     meta = env_meta(env)
     recording = {"config_hash": meta["config_hash"],
                  "post_success_steps": settings.post_success_steps}
+    if settings.keep_failures:
+        recording["keep_failures"] = True
     staging = Staging(out)
     finished = _finished(out, recording)
     if finished and not staging.dir.exists() and len(finished["episodes"]) >= settings.num_demos:
@@ -147,8 +152,8 @@ def collect(env: DexEnv, expert: Expert, out: pathlib.Path, settings: CollectSet
     kept = {ep.key: ep for ep in staging.load()}
     if resumed:  # an earlier run's counters go on (also an expert changed since)
         print(f"resuming {staging.dir}: {len(kept)} kept of "
-              f"{len(kept) + prog.timeouts + prog.failures} attempts so far; delete it to "
-              "start over", file=sys.stderr)
+              f"{_successes(kept.values()) + prog.timeouts + prog.failures} attempts so far; "
+              "delete it to start over", file=sys.stderr)
     for ep in read_episodes(out, finished) if finished else []:
         if ep.key not in kept:
             ep.save(staging.episodes)
@@ -182,7 +187,7 @@ def _run(env: DexEnv, expert: Expert, settings: CollectSettings, staging: Stagin
             prog.next_episode[key[1]] = max(prog.next_episode[key[1]], key[2] + 1)
 
     def attempts() -> int:
-        return len(kept) + prog.timeouts + prog.failures
+        return _successes(kept.values()) + prog.timeouts + prog.failures
 
     def more() -> bool:
         return len(kept) < settings.num_demos and attempts() < settings.max_attempts
@@ -214,7 +219,8 @@ def _run(env: DexEnv, expert: Expert, settings: CollectSettings, staging: Stagin
         success_at[first] = length[first]
         succeeded = success_at >= 0
         failed = info["sim_warnings"].numpy() > 0
-        timeout = truncated.numpy() & ~succeeded
+        gave_up = expert.ended() if hasattr(expert, "ended") else np.zeros(n, dtype=bool)
+        timeout = (truncated.numpy() | gave_up) & ~succeeded
         ended = failed | timeout | (succeeded & (
             (length - success_at >= settings.post_success_steps) | truncated.numpy()))
         for i in np.flatnonzero(ended):
@@ -223,19 +229,21 @@ def _run(env: DexEnv, expert: Expert, settings: CollectSettings, staging: Stagin
             ep = None
             if failed[i]:
                 prog.failures += 1
-            elif timeout[i]:
+            elif timeout[i] and not settings.keep_failures:
                 prog.timeouts += 1
             else:
+                prog.timeouts += int(bool(timeout[i]))
                 cols = frames.episode(i, start[i], step)
                 ep = Episode(key=tuple(int(k) for k in env.episode_keys[i]),
                              actions=cols.pop(ACTION), states=cols.pop(SIM_STATE), obs=cols,
-                             success_step=int(success_at[i]))
+                             success_step=int(success_at[i]) if succeeded[i] else -1)
                 ep.save(staging.episodes)
                 kept[ep.key] = ep
             staging.save(recording, dataclasses.replace(
                 prog, wall_time_s=prog.wall_time_s + time.perf_counter() - started))
             bar.update(int(ep is not None))
-            bar.set_postfix(attempts=attempts(), rate=f"{len(kept) / attempts():.2f}")
+            bar.set_postfix(attempts=attempts(),
+                            rate=f"{_successes(kept.values()) / attempts():.2f}")
             if ep is not None and on_episode is not None:
                 on_episode(ep)
         if not more():
@@ -247,9 +255,15 @@ def _run(env: DexEnv, expert: Expert, settings: CollectSettings, staging: Stagin
             frames.drop_before(int(start.min()))
 
 
+def _successes(episodes) -> int:
+    """Kept episodes in which success held (all of them unless `keep_failures`)."""
+    return sum(ep.success_step >= 0 for ep in episodes)
+
+
 def _stats(meta: dict, settings: CollectSettings, episodes: list[Episode], prog: Progress,
            expert: str) -> dict:
-    attempts = len(episodes) + prog.timeouts + prog.failures
+    successes = _successes(episodes)
+    attempts = successes + prog.timeouts + prog.failures
     lengths = [ep.length for ep in episodes]
     raw = 0
     if episodes:
@@ -263,10 +277,11 @@ def _stats(meta: dict, settings: CollectSettings, episodes: list[Episode], prog:
         "num_demos": settings.num_demos,
         "complete": len(episodes) >= settings.num_demos,
         "attempts": attempts,
-        "successes": len(episodes),
+        "successes": successes,
+        "kept": len(episodes),
         "timeouts": prog.timeouts,
         "failures": prog.failures,
-        "success_rate": round(len(episodes) / attempts, 4) if attempts else 0.0,
+        "success_rate": round(successes / attempts, 4) if attempts else 0.0,
         "mean_episode_length": round(float(np.mean(lengths)), 2) if lengths else 0.0,
         "frames": int(sum(lengths)),
         "raw_bytes_per_step": int(raw),
@@ -291,7 +306,8 @@ def _assemble(out: pathlib.Path, staging: Staging, meta: dict, episodes: list[Ep
     recompress(build)
     files = digests(build, META_FILE)
     meta = {**meta, "repo_id": dataset.repo_id, "files": files, "episodes": [
-        {"episode_index": i, "key": list(ep.key), "length": ep.length, "success": True,
+        {"episode_index": i, "key": list(ep.key), "length": ep.length,
+         "success": ep.success_step >= 0,
          "success_step": ep.success_step, "task": meta["task"],
          "instruction": meta["instruction"], "embodiment": meta["embodiment"]}
         for i, ep in enumerate(episodes)]}

@@ -37,17 +37,20 @@ class EpisodeCamera:
     def render(self, env_ids: list[int]) -> list[np.ndarray]:
         """(H, W, 3) uint8 frames of those envs in their current state."""
         states = self._env.sim_state()[env_ids].cpu().numpy()
-        frames = []
-        for env_id, state in zip(env_ids, states, strict=True):
-            mujoco.mj_setState(self._model, self._data, state, STATE_SPEC)
-            mujoco.mj_forward(self._model, self._data)
-            sim = self._env.sim
-            model = (sim.world_model(env_id, self._world) if isinstance(sim, CpuBackend)
-                     else self._model)
-            mujoco.mjv_updateScene(model, self._data, self._option, None, self._camera,
-                                   mujoco.mjtCatBit.mjCAT_ALL.value, self._renderer.scene)
-            frames.append(self._renderer.render().copy())
-        return frames
+        return [self.render_state(state, env_id)
+                for env_id, state in zip(env_ids, states, strict=True)]
+
+    def render_state(self, state: np.ndarray, env_id: int = 0) -> np.ndarray:
+        """(H, W, 3) uint8 frame of a recorded simulator state, as env `env_id` shows it
+        (its visual variation); the env itself is not touched."""
+        mujoco.mj_setState(self._model, self._data, state, STATE_SPEC)
+        mujoco.mj_forward(self._model, self._data)
+        sim = self._env.sim
+        model = (sim.world_model(env_id, self._world) if isinstance(sim, CpuBackend)
+                 else self._model)
+        mujoco.mjv_updateScene(model, self._data, self._option, None, self._camera,
+                               mujoco.mjtCatBit.mjCAT_ALL.value, self._renderer.scene)
+        return self._renderer.render().copy()
 
     def close(self) -> None:
         self._renderer.close()

@@ -26,6 +26,7 @@ import numpy as np
 
 from dexbench.assets.objects import new_spec
 from dexbench.embodiments.builder import add_embodiment
+from dexbench.embodiments.hands import RetargetSpec
 from dexbench.embodiments.ik import solve_site_pose
 from dexbench.embodiments.layout import Embodiment
 
@@ -64,6 +65,26 @@ def wrist_pose(keypoints: np.ndarray, side: str) -> np.ndarray:
     pose[:3, :3] = np.column_stack([x, y, np.cross(x, y)])
     pose[:3, 3] = keypoints[0]
     return pose
+
+
+def robot_as_human(palm_pos: np.ndarray, palm_rot: np.ndarray, tips: np.ndarray,
+                   wrist_point: np.ndarray, spec: RetargetSpec) -> HandFrame:
+    """A robot hand's pose as the keypoints of a human hand `spec.scale` times smaller:
+    the wrist keypoint at the hand's wrist point (`Retargeter.wrist`, palm site frame),
+    the fingertip keypoints `spec.tips` at the fingertip sites `tips` (n, 3, world) pulled
+    towards it, the other keypoints on the wrist-tip lines; the wrist frame is the palm's.
+    Robot motion recorded this way drives another hand as a human's would."""
+    wrist = palm_pos + palm_rot @ wrist_point
+    human_tips = wrist + (tips - wrist) / spec.scale
+    keypoints = np.repeat(wrist[None], NUM_KEYPOINTS, axis=0)
+    for finger in range(5):
+        tip = human_tips[min(finger, len(human_tips) - 1)]
+        for k in range(4):
+            keypoints[1 + 4 * finger + k] = wrist + (k + 1) / 4 * (tip - wrist)
+    keypoints[list(spec.tips)] = human_tips
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = palm_rot, wrist
+    return HandFrame(keypoints, pose)
 
 
 class Retargeter:
