@@ -158,8 +158,8 @@ def test_chunked_actor_plans_only_for_envs_whose_queue_ran_out():
     actor.reset(torch.tensor([0]))
     actor.act({"x": torch.full((2, 1), 12.0)}, plan)
     assert calls == [2, 2, 1]
-    assert torch.equal(actor.history["x"][0, :, 0], torch.tensor([12.0, 12.0]))  # refilled
-    assert torch.equal(actor.history["x"][1, :, 0], torch.tensor([11.0, 12.0]))
+    assert torch.equal(actor.window.history["x"][0, :, 0], torch.tensor([12.0, 12.0]))  # refilled
+    assert torch.equal(actor.window.history["x"][1, :, 0], torch.tensor([11.0, 12.0]))
 
 
 def test_windows_repeat_the_first_observation_and_the_last_action():

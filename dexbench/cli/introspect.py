@@ -21,6 +21,7 @@ from dexbench.cli.matrix import MATRIX
 from dexbench.cli.merge import merge
 from dexbench.cli.serve import SERVE
 from dexbench.cli.snapshot import SNAPSHOT
+from dexbench.cli.transfer import TRANSFER
 from dexbench.cli.validate import VALIDATE
 from dexbench.embodiments.builder import embodiment_names, parse_embodiment
 from dexbench.tasks.registry import TASKS, make_env
@@ -37,7 +38,8 @@ USAGE = """usage:
   python -m dexbench cloud dataset=<folder with point clouds> episode=0 frame=10 out=<file>.ply
   python -m dexbench merge <eval run or sweep folder> ... [out=<folder>]
   python -m dexbench split <split>   (its implemented tasks, comma-separated, for -m split_task=)
-  python -m dexbench matrix split=<split> episodes=20 jobs=<N>   (the expert on every cell)"""
+  python -m dexbench matrix split=<split> episodes=20 jobs=<N>   (the expert on every cell)
+  python -m dexbench transfer tasks=[PickCube,...] episodes=10   (expert motion -> other hands)"""
 
 
 def list_tasks() -> str:
@@ -101,7 +103,7 @@ def _check_inspect(cfg: DictConfig, overrides: list[str]) -> None:
 
 INSPECT = register(Command("inspect", _print_inspect, _check_inspect))
 VERBS = {"inspect": INSPECT, "snapshot": SNAPSHOT, "validate": VALIDATE, "matrix": MATRIX,
-         "serve": SERVE, "cloud": CLOUD}
+         "serve": SERVE, "cloud": CLOUD, "transfer": TRANSFER}
 
 
 def main(argv: list[str]) -> int:

@@ -53,7 +53,6 @@ import json
 import logging
 import threading
 import traceback
-from collections import deque
 from collections.abc import Mapping
 from typing import Any, Protocol
 
@@ -64,6 +63,7 @@ from websockets.frames import CloseCode
 from websockets.sync.server import Server, ServerConnection, serve
 
 from dexbench.policies.common.checkpoint import load_checkpoint
+from dexbench.policies.common.chunking import ObsWindow
 from dexbench.policies.common.normalizer import MinMaxNormalizer
 from dexbench.policies.common.runner import resolve_device
 from dexbench.policies.registry import KINDS, SERVED, policy_module
@@ -129,12 +129,12 @@ class DiffusionServed:
 class DiffusionSession:
     def __init__(self, served: DiffusionServed, seed: int) -> None:
         self.served = served
-        self.history: deque[dict[str, torch.Tensor]] = deque(maxlen=served.n_obs_steps)
+        self.window = ObsWindow(1, served.n_obs_steps, served.device)
         self.generator = torch.Generator(served.device)
         self.reset(seed)
 
     def reset(self, seed: int) -> None:
-        self.history.clear()
+        self.window.reset()
         self.generator.manual_seed(seed)
 
     def step(self, frame: dict[str, np.ndarray], plan: bool) -> np.ndarray | None:
@@ -142,12 +142,9 @@ class DiffusionSession:
         normalized = {g: s.normalizer.normalize(
             g, torch.as_tensor(frame[g], dtype=torch.float32, device=s.device)[None])
             for g in s.groups}
-        while len(self.history) < s.n_obs_steps - 1:  # a first frame fills the window
-            self.history.append(normalized)
-        self.history.append(normalized)
+        windows = self.window.push(normalized)
         if not plan:
             return None
-        windows = {g: torch.stack([f[g] for f in self.history], dim=1) for g in s.groups}
         with s.lock, torch.inference_mode():
             chunk = s.model.sample(windows, generator=self.generator)
             chunk = s.normalizer.unnormalize("action", chunk)

@@ -15,26 +15,21 @@ import torch
 Planner = Callable[[dict[str, torch.Tensor]], torch.Tensor]
 
 
-class ChunkedActor:
-    def __init__(self, num_envs: int, n_obs_steps: int, n_action_steps: int,
-                 action_dim: int, device: torch.device | str = "cpu") -> None:
-        if n_obs_steps < 1 or n_action_steps < 1:
-            raise ValueError(f"need n_obs_steps >= 1 and n_action_steps >= 1, got "
-                             f"{n_obs_steps}, {n_action_steps}")
-        self.num_envs, self.n_obs_steps, self.n_action_steps = num_envs, n_obs_steps, n_action_steps
-        self.device = torch.device(device)
+class ObsWindow:
+    """The last `n_obs_steps` frames of each env, (N, To, ...) per key; the first frame
+    after a reset fills the whole window."""
+
+    def __init__(self, num_envs: int, n_obs_steps: int,
+                 device: torch.device | str = "cpu") -> None:
+        self.n_obs_steps, self.device = n_obs_steps, torch.device(device)
         self.history: dict[str, torch.Tensor] = {}
-        self.queue = torch.zeros(num_envs, n_action_steps, action_dim, device=self.device)
-        self.cursor = torch.full((num_envs,), n_action_steps, device=self.device)
         self.fresh = torch.ones(num_envs, dtype=torch.bool, device=self.device)
 
-    def reset(self, env_ids: torch.Tensor | None = None) -> None:
-        """Those envs (default all) start over: history refilled, queue emptied."""
-        ids = slice(None) if env_ids is None else torch.as_tensor(env_ids, device=self.device)
-        self.fresh[ids] = True
-        self.cursor[ids] = self.n_action_steps
+    def reset(self, env_ids: torch.Tensor | slice = slice(None)) -> None:
+        self.fresh[env_ids] = True
 
-    def _push(self, obs: dict[str, torch.Tensor]) -> None:
+    def push(self, obs: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """Add one frame per env (N, ...) per key; the windows."""
         for key, value in obs.items():
             value = value.to(self.device)
             stack = self.history.get(key)
@@ -45,14 +40,34 @@ class ChunkedActor:
                 stack[self.fresh] = value[self.fresh, None]
             self.history[key] = stack
         self.fresh[:] = False
+        return self.history
+
+
+class ChunkedActor:
+    def __init__(self, num_envs: int, n_obs_steps: int, n_action_steps: int,
+                 action_dim: int, device: torch.device | str = "cpu") -> None:
+        if n_obs_steps < 1 or n_action_steps < 1:
+            raise ValueError(f"need n_obs_steps >= 1 and n_action_steps >= 1, got "
+                             f"{n_obs_steps}, {n_action_steps}")
+        self.num_envs, self.n_obs_steps, self.n_action_steps = num_envs, n_obs_steps, n_action_steps
+        self.device = torch.device(device)
+        self.window = ObsWindow(num_envs, n_obs_steps, self.device)
+        self.queue = torch.zeros(num_envs, n_action_steps, action_dim, device=self.device)
+        self.cursor = torch.full((num_envs,), n_action_steps, device=self.device)
+
+    def reset(self, env_ids: torch.Tensor | None = None) -> None:
+        """Those envs (default all) start over: history refilled, queue emptied."""
+        ids = slice(None) if env_ids is None else torch.as_tensor(env_ids, device=self.device)
+        self.window.reset(ids)
+        self.cursor[ids] = self.n_action_steps
 
     def act(self, obs: dict[str, torch.Tensor], plan: Planner) -> torch.Tensor:
         """One action per env (num_envs, A); `plan` maps the windows (n, To, ...) of the
         envs that need a new chunk to chunks (n, horizon >= n_action_steps, A)."""
-        self._push(obs)
+        history = self.window.push(obs)
         need = self.cursor >= self.n_action_steps
         if need.any():
-            chunk = plan({k: v[need] for k, v in self.history.items()})
+            chunk = plan({k: v[need] for k, v in history.items()})
             if chunk.shape[1] < self.n_action_steps:
                 raise ValueError(f"a chunk of {chunk.shape[1]} actions cannot fill "
                                  f"{self.n_action_steps} execution steps")
