@@ -132,3 +132,17 @@ def test_push_candidates_sit_on_the_outline_and_push_inwards():
     assert len(points) > 40
     assert not inside_rects(points - 1e-3 * pushes, rects, 0.0).any()  # just outside
     assert inside_rects(points + 1e-3 * pushes, rects, 0.0).all()  # just inside
+
+
+def test_carrying_to_the_goal_leaves_the_tasks_goal_where_it_was_sampled():
+    """The grasp expert raises its carry target over clutter; that must be its own copy:
+    `task_goal` reads the task's goal, which the success check and the goal observation
+    use (it once moved the goal up mid-episode)."""
+    env = make_env("RelocateSphere", num_envs=2, seed=0, nthread=1)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(2))
+    sampled = env.view.goal.clone()
+    for _ in range(300):
+        env.step(expert.act())
+    assert torch.equal(env.view.goal, sampled)

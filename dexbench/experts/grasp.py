@@ -252,7 +252,10 @@ class GraspExpert:
                 target_pos[carry] = (self.lift_from + np.array([0.0, 0.0, self.plan.lift]))[carry]
             else:
                 goal_point, _ = self._object_point(self.goal_body, self.goal_point)
-                goal = self.plan.target(self.env)
+                # A copy: `task_goal` may be a view of the task's own goal, which the
+                # raise below must not move (the success check and the goal observation
+                # read it).
+                goal = np.array(self.plan.target(self.env), dtype=float)
                 # Travel above the table's clutter; come down only over the target.
                 far = np.linalg.norm((goal - goal_point)[:, :2], axis=1) > CARRY_NEAR
                 far &= self.plan.carry_high
