@@ -28,7 +28,7 @@ class HandGeometry:
     """Hand-frame pose, fingertip points and synergy targets of one hand side.
 
     Besides each hand's declared synergies, every hand gets `hook`: `power` on the
-    fingers, `open` on the thumb (derived, not declared)."""
+    fingers, `open` on the thumb (derived, unless the hand declares its own)."""
 
     frame_pos: np.ndarray  # (3,) origin of H in the hand file's world frame
     frame_rot: np.ndarray  # (3, 3) columns: H's x (fingers), y, z (palm normal)
@@ -94,13 +94,14 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
     open_ = synergy_targets(hand.synergies.get("open", {}), names, ranges, zero)
     synergies = {
         s: synergy_targets(hand.synergies.get(s, {}), names, ranges, open_)
-        for s in SYNERGIES if s != "hook"
+        for s in SYNERGIES if s != "hook" or s in hand.synergies
     }
 
     palm = model.body(parts.palm_body).id
     tips = [model.body(b).id for b in parts.fingertip_bodies]
     thumb = thumb_actuators(model, palm, tips[0])
-    synergies["hook"] = np.where(thumb, synergies["open"], synergies["power"])
+    if "hook" not in hand.synergies:
+        synergies["hook"] = np.where(thumb, synergies["open"], synergies["power"])
     _settle(model, data, synergies["open"])
     open_qpos = {
         model.joint(j).name: float(data.qpos[model.jnt_qposadr[j]]) for j in range(model.njnt)

@@ -319,6 +319,17 @@ HANDS: dict[str, HandSpec] = {
                 r"thumb_proximal_2_drive$": 0.66,
                 r"thumb_(middle|distal)_drive$": 0.0,
             },
+            # Declared, not derived: this hand's open thumb stands out from the palm, so
+            # a vessel held in the curled fingers rolls out over it. The thumb turns
+            # across the palm, a little flexed (a wall, not a clamp, at the plans' twofold
+            # squeeze), and the index stays open: both would otherwise lie at a tipped
+            # cup's rim (searched on GraspCup, 4 of 4 held clear of the rim).
+            "hook": {
+                r"(middle|ring|pinky)_proximal_drive$": 1.38,
+                r"(middle|ring|pinky)_distal_drive$": 0.87,
+                r"thumb_proximal_1_drive$": 0.65,
+                r"thumb_proximal_2_drive$": 0.15,
+            },
             "pinch": {
                 r"index_proximal_drive$": 0.9,
                 r"index_distal_drive$": 0.9,
@@ -381,5 +392,6 @@ HANDS: dict[str, HandSpec] = {
     ),
 }
 
-# `hook` is derived for every hand (power fingers, open thumb), not declared in HandSpec.
+# `hook` is derived for every hand (power fingers, open thumb) unless its HandSpec
+# declares one (a hand whose open thumb lets a held vessel roll out).
 SYNERGIES = ("open", "power", "pinch", "tip_pinch", "hook")
