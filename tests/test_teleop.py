@@ -5,6 +5,7 @@ measurement's identity case (the source hand driven by its own commanded motion)
 from __future__ import annotations
 
 import json
+import pathlib
 from types import SimpleNamespace
 
 import numpy as np
@@ -128,3 +129,15 @@ def test_mediapipe_frames_from_a_hand_landmarker_result():
     wrist = np.array([0.0, 0.25 * 0.6, 0.25 * 0.4])
     assert np.allclose(frame.keypoints, wrist + hand - hand[0])
     assert "left" in mediapipe_frames(result, mirrored=True)
+
+
+def test_transfer_command_writes_its_table(capsys):
+    from dexbench.cli.introspect import main as dexbench_main
+
+    assert dexbench_main(["transfer", "tasks=[PickCube]", "episodes=1",
+                          "targets=[floating_shadow]", "sim.nthread=1"]) == 0
+    out = capsys.readouterr().out
+    assert "floating_shadow: 1/1 solved" in out
+    run_dir = pathlib.Path(json.loads(out.strip().splitlines()[-1])["run_dir"])
+    assert "| PickCube | floating_shadow | 1/1 |" in (run_dir / "transfer.md").read_text()
+    assert len(json.loads((run_dir / "transfer.json").read_text())["rows"]) == 1

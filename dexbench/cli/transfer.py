@@ -49,7 +49,8 @@ def _run(cfg: DictConfig, _prepared: None, out: pathlib.Path) -> int:
               flush=True)
         if not takes:
             continue
-        for target in [source, *other_hands(source)]:
+        targets = list(map(str, cfg.targets)) if cfg.targets else [source, *other_hands(source)]
+        for target in targets:
             result = dataclasses.asdict(replay_takes(task, target, takes, int(cfg.seed)))
             rows.append({"task": task, "source": source, **result})
             print(f"  {target}: {result['successes']}/{result['takes']} solved, fingertip "
