@@ -141,3 +141,21 @@ def test_transfer_command_writes_its_table(capsys):
     run_dir = pathlib.Path(json.loads(out.strip().splitlines()[-1])["run_dir"])
     assert "| PickCube | floating_shadow | 1/1 |" in (run_dir / "transfer.md").read_text()
     assert len(json.loads((run_dir / "transfer.json").read_text())["rows"]) == 1
+
+
+def test_mediapipe_frames_from_mediapipes_own_result_type():
+    """The same hand as MediaPipe's own `HandLandmarkerResult` (the `teleop` extra)."""
+    pytest.importorskip("mediapipe")
+    from mediapipe.tasks.python.components.containers.category import Category
+    from mediapipe.tasks.python.components.containers.landmark import Landmark, NormalizedLandmark
+    from mediapipe.tasks.python.vision.hand_landmarker import HandLandmarkerResult
+
+    hand = _human_hand(np.random.default_rng(2))
+    cam = np.column_stack([hand[:, 1], -hand[:, 2], -hand[:, 0]])
+    result = HandLandmarkerResult(
+        handedness=[[Category(index=1, score=0.98, display_name="", category_name="Right")]],
+        hand_landmarks=[[NormalizedLandmark(x=0.5, y=0.5, z=0.0) for _ in hand]],
+        hand_world_landmarks=[[Landmark(x=float(x), y=float(y), z=float(z)) for x, y, z in cam]])
+    frames = mediapipe_frames(result)
+    assert set(frames) == {"left"}
+    assert np.allclose(frames["left"].keypoints, hand - hand[0], atol=1e-6)
