@@ -149,8 +149,9 @@ LANDMARKER_MODEL = "hand_landmarker.task"
 
 
 class WebcamSource:
-    """A webcam through MediaPipe's hand landmarker (the `teleop` extra; the model file `hand_landmarker.task` from MediaPipe's model page, at
-    `$DEXBENCH_HAND_LANDMARKER` or `~/.cache/dexbench/hand_landmarker.task`)."""
+    """A webcam through MediaPipe's hand landmarker (the `teleop` extra; the model file
+    `hand_landmarker.task` from MediaPipe's model page, at `$DEXBENCH_HAND_LANDMARKER` or
+    `~/.cache/dexbench/hand_landmarker.task`)."""
 
     def __init__(self, index: int = 0, sides: tuple[str, ...] = ("right",)) -> None:
         import os
