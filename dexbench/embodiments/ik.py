@@ -6,6 +6,8 @@ Works on any compiled model; only the listed joints move.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
@@ -20,11 +22,13 @@ def solve_site_pose(
     iterations: int = 300,
     damping: float = 1e-3,
     tol: float = 1e-4,
+    clearance: Clearance | None = None,
 ) -> tuple[np.ndarray, float]:
     """Move `joints` in `data.qpos` so `site` reaches the target; return (qpos, error).
 
     Position error is in metres; with a target rotation, the orientation error (rad) is
-    added with weight 0.1 m/rad. Joint limits are enforced every iteration.
+    added with weight 0.1 m/rad. Joint limits are enforced every iteration. `clearance`
+    keeps geom pairs apart (the error counts only the site's pose).
     """
     sid = model.site(site).id
     jids = [model.joint(j).id for j in joints]
@@ -49,12 +53,48 @@ def solve_site_pose(
             jac.append(0.1 * jacr[:, dadr])
         e = np.concatenate(rows)
         err = float(np.linalg.norm(e))
-        if err < tol:
+        apart = [] if clearance is None else clearance.rows(model, data, dadr)
+        if err < tol and not apart:
             break
+        if apart:
+            e = np.concatenate([e, *(r for r, _ in apart)])
+            jac += [jr for _, jr in apart]
         j = np.vstack(jac)
         dq = j.T @ np.linalg.solve(j @ j.T + damping * np.eye(j.shape[0]), e)
         data.qpos[qadr] = np.clip(data.qpos[qadr] + dq, lo, hi)
     return data.qpos[qadr].copy(), err
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """Geom pairs (moving geom, obstacle geom) the IK keeps `margin` metres apart.
+
+    A pair closer than that adds one row: the moving geom's nearest point, pushed along
+    the pair's separating direction by the shortfall (weight 1, like the site's
+    position, so the pose gives way where both cannot hold).
+    """
+
+    pairs: tuple[tuple[int, int], ...]
+    margin: float = 0.01
+
+    def rows(self, model: mujoco.MjModel, data: mujoco.MjData, dadr: np.ndarray
+             ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(error, jacobian) rows of the pairs within the margin now."""
+        out = []
+        fromto = np.zeros(6)
+        jacp = np.zeros((3, model.nv))
+        for geom, obstacle in self.pairs:
+            dist = mujoco.mj_geomDistance(model, data, geom, obstacle, self.margin, fromto)
+            if dist >= self.margin:
+                continue
+            away = fromto[:3] - fromto[3:]
+            norm = np.linalg.norm(away)
+            if norm < 1e-9:
+                continue
+            away *= np.sign(dist) / norm if dist else 1.0 / norm
+            mujoco.mj_jac(model, data, jacp, None, fromto[:3], model.geom_bodyid[geom])
+            out.append((np.array([self.margin - dist]), (away @ jacp[:, dadr])[None]))
+        return out
 
 
 def _rotation_error(current: np.ndarray, target: np.ndarray) -> np.ndarray:

@@ -14,10 +14,11 @@ import mujoco
 import numpy as np
 import torch
 
-from dexbench.embodiments.ik import solve_site_pose
+from dexbench.embodiments.ik import Clearance, solve_site_pose
 from dexbench.envs.dex_env import DexEnv
 
 IK_ITERATIONS = 10
+TABLE_CLEARANCE = 0.01  # m: arm links kept above the table top
 
 
 @dataclass
@@ -67,6 +68,12 @@ class ActionAdapter:
     between the mount and the palm: the Shadow hand's) stood at their commanded targets,
     not where they are measured: a heavy held object swings a weak wrist, and a mount
     that takes out each swing drives it further (the object is flung out of the grip).
+
+    On an arm the IK keeps the arm's links `TABLE_CLEARANCE` above the table top, trading
+    the palm's pose for it: the plans pose a palm low over the table, as the floating
+    hand allows, where a flange beside the hand (the FR3's, carrying it flat) would land
+    on the table and prop the palm off its pose. The hand's own parts (the Shadow
+    forearm) meet the table as they do on the floating mount.
     """
 
     def __init__(self, env: DexEnv, commanded_hand: bool = False) -> None:
@@ -94,8 +101,27 @@ class ActionAdapter:
                 np.array([model.joint(joint_of[emb.actuators[i]]).qposadr[0] for i in held],
                          dtype=int),
                 np.array([model.actuator(emb.actuators[i]).gear[0] for i in held]))
+        self._clearance = ({} if emb.mount == "floating" else
+                           {side: self._table_clearance(side) for side in emb.sides})
         self._poses = emb.poses
         self._solution: dict[str, np.ndarray] = {}
+
+    def _table_clearance(self, side: str) -> Clearance | None:
+        """An arm side's moving link geoms (above the hand's root) against the table top;
+        None without a table."""
+        model = self.model
+        try:
+            table = model.geom("table_top").id
+        except KeyError:
+            return None
+        layout = self.env.embodiment.sides[side]
+        body, moving = model.body_parentid[model.body(layout.hand_root).id], []
+        while model.body_weldid[body]:
+            first = model.body_geomadr[body]
+            moving += [g for g in range(first, first + model.body_geomnum[body])
+                       if model.geom_contype[g] or model.geom_conaffinity[g]]
+            body = model.body_parentid[body]
+        return Clearance(tuple((g, table) for g in moving), TABLE_CLEARANCE)
 
     def pose(self, name: str) -> np.ndarray:
         """A named pose (every actuator's target) commands can blend towards."""
@@ -129,13 +155,14 @@ class ActionAdapter:
             c = np.clip(cmd.closure, 0.0, 1.0)[:, None]
             out[:, hand] = opened + c * (closed - opened)
             held, held_adr, gear = self._hand_joints[side]
+            clearance = self._clearance.get(side)
             for i in range(n):
                 data.qpos[:] = qpos[i]
                 data.qpos[qadr] = self._solution[side][i]
                 if self.commanded_hand:
                     data.qpos[held_adr] = out[i, held] / gear
                 q, _ = solve_site_pose(model, data, site, joints, cmd.pos[i], cmd.rot[i],
-                                       iterations=IK_ITERATIONS)
+                                       iterations=IK_ITERATIONS, clearance=clearance)
                 self._solution[side][i] = q
             out[:, mount] = self._solution[side]
         return torch.as_tensor(out, device=self.env.device)
