@@ -18,6 +18,7 @@ from dexbench.experts.hold_actuate import HoldActuateExpert
 from dexbench.experts.insert import InsertExpert
 from dexbench.experts.path_push import PathPushExpert
 from dexbench.experts.pinch import PinchExpert
+from dexbench.experts.pivot import PivotExpert
 from dexbench.experts.pour import PourExpert
 from dexbench.experts.press import PressExpert
 from dexbench.experts.push import PushExpert
@@ -27,6 +28,7 @@ from dexbench.experts.stack import StackLiftExpert
 from dexbench.experts.strike import StrikeExpert
 from dexbench.experts.swing import SwingExpert
 from dexbench.experts.turn import TurnExpert
+from dexbench.experts.twist import TwistExpert
 from dexbench.tasks import plans
 
 KINDS: dict[type, Any] = {
@@ -36,6 +38,7 @@ KINDS: dict[type, Any] = {
     plans.TurnPlan: TurnExpert,
     plans.PushPlan: PushExpert,
     plans.PathPushPlan: PathPushExpert,
+    plans.PivotPlan: PivotExpert,
     plans.TwoHandPlan: TwoHandLiftExpert,
     plans.InsertPlan: InsertExpert,
     plans.PourPlan: PourExpert,
@@ -44,6 +47,7 @@ KINDS: dict[type, Any] = {
     plans.StackLiftPlan: StackLiftExpert,
     plans.StrikePlan: StrikeExpert,
     plans.SwingPlan: SwingExpert,
+    plans.TwistPlan: TwistExpert,
 }
 
 

@@ -31,6 +31,7 @@ STUCK_SECONDS = 1.5  # ... as when the head is not past the entrance after this 
 ENTERED = 0.005  # m past the entrance: the head is in the bore
 STALL_SECONDS = 4.0  # lining up this long without pushing: `stalled` (grasp it again)
 PUSH_PAST = 0.01  # m the push aims beyond the target (the bottom stops it)
+KEYED = np.radians(4.0)  # keyed fits: the key's misalignment before pushing
 
 
 class InsertExpert:
@@ -44,6 +45,8 @@ class InsertExpert:
         self.head, self.shaft = peg.points[plan.head], peg.axes[plan.shaft]
         self.entrance, self.target = hole.points[plan.entrance], hole.points[plan.target]
         self.bore = hole.axes[plan.bore]
+        self.key = None if plan.key is None else (peg.axes[plan.key[0]], hole.axes[plan.key[1]],
+                                                  plan.key[2])
         self._palm = env.scene.model.site(env.embodiment.sides[side].palm_site).id
         n = env.num_envs
         self.pos = np.zeros((n, 3))
@@ -79,18 +82,29 @@ class InsertExpert:
         line_up = entrance - (STANDOFF * inward)
         home = view.point_pos(*self.target).cpu().numpy() + PUSH_PAST * inward
         angle = np.arccos(np.clip((shaft * inward).sum(axis=1), -1.0, 1.0))
-        self.pushing |= ((np.linalg.norm(head - line_up, axis=1) < LINED_UP)
-                         & (angle < ALIGNED))
-        self.push_time = np.where(self.pushing, self.push_time + self.env.control_dt, 0.0)
-        outside = ((head - entrance) * inward).sum(axis=1) < ENTERED
-        self.pushing &= (angle < JAMMED) & ~(outside & (self.push_time > STUCK_SECONDS))
-        self.line_up_time = np.where(self.pushing, 0.0, self.line_up_time + self.env.control_dt)
-        goal = np.where(self.pushing[:, None], home, line_up)
         # The turn taking the shaft onto the bore axis, about the palm.
         axis = np.cross(shaft, inward)
         norm = np.linalg.norm(axis, axis=1, keepdims=True)
         axis = np.where(norm > 1e-9, axis / np.maximum(norm, 1e-9), [0.0, 0.0, 1.0])
         turn = turned(axis, angle)
+        keyed = np.ones(self.env.num_envs, dtype=bool)
+        if self.key is not None:
+            peg_key, hole_key, period = self.key
+            peg_key = np.einsum("nij,nj->ni", turn, view.axis(*peg_key).cpu().numpy())
+            hole_key = view.axis(*hole_key).cpu().numpy()
+            # Then about the bore, by the least turn matching the keys (modulo the period).
+            spin = np.arctan2((np.cross(peg_key, hole_key) * inward).sum(axis=1),
+                              (peg_key * hole_key).sum(axis=1))
+            spin = (spin + period / 2) % period - period / 2
+            turn = turned(inward, spin) @ turn
+            keyed = np.abs(spin) < KEYED
+        self.pushing |= ((np.linalg.norm(head - line_up, axis=1) < LINED_UP)
+                         & (angle < ALIGNED) & keyed)
+        self.push_time = np.where(self.pushing, self.push_time + self.env.control_dt, 0.0)
+        outside = ((head - entrance) * inward).sum(axis=1) < ENTERED
+        self.pushing &= (angle < JAMMED) & ~(outside & (self.push_time > STUCK_SECONDS))
+        self.line_up_time = np.where(self.pushing, 0.0, self.line_up_time + self.env.control_dt)
+        goal = np.where(self.pushing[:, None], home, line_up)
         palm, palm_rot = self._palm_pose()
         target_pos = goal - np.einsum("nij,nj->ni", turn, head - palm)
         target_rot = turn @ palm_rot

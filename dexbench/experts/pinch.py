@@ -169,6 +169,9 @@ class PinchExpert:
         self.line_yaw = float(np.arctan2(across[1], across[0]))
         info = env.task.objects[plan.obj]
         self.body, self.point = locate(env.task.objects, plan.obj, plan.point)
+        self.goal_body, self.goal_local = (
+            (self.body, self.point) if plan.goal_point is None
+            else locate(env.task.objects, plan.obj, plan.goal_point))
         self.axis = info.axes[plan.axis]
         self._palm = env.scene.model.site(env.embodiment.sides[side].palm_site).id
         self._dt = env.control_dt
@@ -178,11 +181,14 @@ class PinchExpert:
         self.grasp_rot = self.rot.copy()
         self.held = np.zeros((n, 3))
         self.lift_to = np.zeros((n, 3))
+        self.held_goal = np.zeros((n, 3))  # the goal point in the palm frame, once closed
+        self.carry = np.zeros(n, dtype=bool)  # risen, carrying it to the plan's target
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
         self.pos[ids], self.rot[ids] = (v[ids] for v in site_pose(self.env, self._palm))
         self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0
+        self.carry[ids] = False
         self.adapter.reset(ids)
 
     def _grasp_rot(self, current: np.ndarray) -> np.ndarray:
@@ -236,9 +242,17 @@ class PinchExpert:
         done = close & (self.timer > CLOSE_SECONDS + self.plan.settle)
         self.held[done] = np.einsum("nji,nj->ni", palm_rot, point - palm)[done]
         self.lift_to[done] = (self.pos + np.array([0.0, 0.0, self.plan.lift]))[done]
+        goal_now = view.point_pos(self.goal_body, self.goal_local).cpu().numpy()
+        self.held_goal[done] = np.einsum("nji,nj->ni", palm_rot, goal_now - palm)[done]
+        self.carry[done] = False
         self._advance(done, Phase.LIFT)
 
         lift = phase == Phase.LIFT
+        if self.plan.target is not None:  # risen: on to where the goal point meets the target
+            self.carry |= lift & (np.linalg.norm(self.pos - self.lift_to, axis=1) < 1e-3)
+            carry_to = (self.plan.target(self.env)
+                        - np.einsum("nij,nj->ni", self.rot, self.held_goal))
+            self.lift_to[self.carry] = carry_to[self.carry]
         target_pos[lift] = self.lift_to[lift]
         expected = palm + np.einsum("nij,nj->ni", palm_rot, self.held)
         self._advance(lift & (np.linalg.norm(point - expected, axis=1) > LOST_DISTANCE),

@@ -180,7 +180,9 @@ class PinchPlan:
     as they stand at closure `level` (default `preshape`): a thumb that rises as it closes,
     levelled nearer where the tips meet, reaches a thin object's side, not its top. Given
     the object's `width` (m) across the tips instead, they are levelled where they stand
-    that far apart, wherever that is on each hand's closing."""
+    that far apart, wherever that is on each hand's closing. With `target(env) -> (N, 3)`
+    the risen hand then carries the object until its `goal_point` (default: the pinched
+    point) is there, and holds it (a thin object pulled out of a container)."""
 
     obj: str
     point: PointRef = (0.0, 0.0, 0.0)
@@ -194,6 +196,8 @@ class PinchPlan:
     lift: float = 0.1
     level: float | None = None
     width: float | None = None
+    target: EnvFn | None = None
+    goal_point: PointRef | None = None
 
 
 @dataclass(frozen=True)
@@ -274,6 +278,21 @@ class PathPushPlan:
 
 
 @dataclass(frozen=True)
+class PivotPlan:
+    """Stand the flat object `obj` up about its edge `pivot`, held by a support (a wall,
+    a stop) on the far side, by lifting its opposite edge `end` round it: the open hand
+    turns with the object, fingers down the end face and pads towards the pivot, and its
+    fingertips push on the end face towards the pivot and up along the arc (friction
+    carries the end round). `done(env) -> (N,) bool`: up far enough, the hand holds
+    still."""
+
+    obj: str
+    end: PointRef
+    pivot: PointRef
+    done: EnvFn
+
+
+@dataclass(frozen=True)
 class TwoHandPlan:
     """Both hands hook one grip point of `obj` each (`grips`: side -> point name) and lift
     it together. `shift` moves the grip point in the right hand's frame from where the
@@ -324,7 +343,10 @@ class HoldActuatePlan:
 class InsertPlan:
     """Insert the held `peg` (its `head` point and `shaft` axis) into `hole` (its
     `entrance` and `target` points and `bore` axis, pointing out of the hole); the hand
-    keeps closing `synergy` `squeeze` times as far (as the grasp that holds the peg)."""
+    keeps closing `synergy` `squeeze` times as far (as the grasp that holds the peg).
+    A keyed fit (a hex nut onto a hex seat) names `key`: (peg axis, hole axis, period
+    in rad): lining up also turns the peg about the bore until its axis matches the
+    hole's, modulo the period, before it pushes in."""
 
     peg: str
     hole: str
@@ -335,6 +357,25 @@ class InsertPlan:
     bore: str = "bore"
     synergy: str = "power"
     squeeze: float = 1.0
+    key: tuple[str, str, float] | None = None
+
+
+@dataclass(frozen=True)
+class TwistPlan:
+    """Turn a part about the vertical through `obj`'s `point` by regrasping, as fingers
+    run a nut down a bolt: come down palm-down over the point (fingers along world yaw
+    `yaw`, the grasp moved by `shift` in the hand frame as in `GraspPlan`), close
+    `synergy`, turn the hand by `stroke` (rad; negative: clockwise from above) at
+    `turn_rate` following the part down, open, rise and come back for the next stroke;
+    stroke after stroke until the episode ends."""
+
+    obj: str
+    point: PointRef = (0.0, 0.0, 0.0)
+    stroke: float = -1.5
+    yaw: float = 0.75
+    shift: Vec3 = (0.0, 0.0, 0.0)
+    synergy: str = "power"
+    turn_rate: float = 2.5
 
 
 @dataclass(frozen=True)

@@ -471,6 +471,8 @@ class Stage:
     name: str
     event: bool = False
     final: bool = False
+    parts: tuple[str, ...] = ()  # an "in any order" group: done once every part was seen
+    keep: bool = False  # once done, must hold until the end, else the count falls back
 
 
 class StageTask(TabletopTask):
@@ -480,14 +482,51 @@ class StageTask(TabletopTask):
     stage per control step; success is every stage complete and every `final` one
     holding now, so the env's hold window checks them.
 
-    Room to grow: "in any order" groups become stages whose condition is the AND of
-    latched bits in further memory slots; conditions that must keep holding from some
-    stage on fail the episode's progress by resetting `memory[:, 0]`.
+    A stage with `parts` is an "in any order" group: each part's condition
+    (`part_conditions`, in the order of the class's `parts`, all groups' parts together)
+    is latched in its own memory slot (`memory[:, 2 + k]`) once seen true while the group
+    is the current stage; the group's own condition is every one of its parts latched.
+    A `keep` stage, once complete, must keep holding: the step it is seen broken the
+    count falls back to it (it and every stage after it must be done again, their parts'
+    latches cleared), so "the salmon stays inside" holds from placing it to the end.
     """
 
     category = "longhorizon"
     stages: ClassVar[tuple[Stage, ...]]
+    parts: ClassVar[tuple[str, ...]] = ()
     memory_size = 2
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        stages = cls.__dict__.get("stages")
+        if stages is not None:
+            cls.parts = tuple(p for s in stages for p in s.parts)
+            cls.memory_size = 2 + len(cls.parts)
+
+    def part_conditions(self, view: SceneView) -> torch.Tensor:
+        """(N, P) bool: whether each group part's own condition holds now (override when
+        a stage has `parts`)."""
+        return torch.zeros_like(view.memory[:, :0], dtype=torch.bool)
+
+    def latched(self, view: SceneView) -> torch.Tensor:
+        """(N, P) bool: the group parts seen done."""
+        return view.memory[:, 2:2 + len(self.parts)] > 0.5
+
+    def _owner(self, view: SceneView) -> torch.Tensor:
+        """(P,) the index of the stage each part belongs to."""
+        return view.constant((self.name, "owner"), [float(k) for k, s in enumerate(self.stages)
+                                                    for _ in s.parts]).long()
+
+    def _with_groups(self, view: SceneView, conds: torch.Tensor) -> torch.Tensor:
+        """`conditions` with each group stage's column: all of its parts latched."""
+        if not self.parts:
+            return conds
+        latched, owner = self.latched(view), self._owner(view)
+        cols = []
+        for k in range(len(self.stages)):
+            mine = owner == k
+            cols.append(latched[:, mine].all(dim=1) if self.stages[k].parts else conds[:, k])
+        return torch.stack(cols, dim=1)
 
     @abstractmethod
     def conditions(self, view: SceneView) -> torch.Tensor:
@@ -501,7 +540,13 @@ class StageTask(TabletopTask):
         return flags > 0.5
 
     def update(self, view: SceneView) -> None:
-        conds, done, count = self.conditions(view), self.completed(view), len(self.stages)
+        done, count = self.completed(view), len(self.stages)
+        if self.parts:  # latch the current group's parts seen done
+            current = (self._owner(view)[None] == done[:, None]) & self.part_conditions(view)
+            view.memory[:, 2:] = torch.where(current, 1.0, view.memory[:, 2:])
+        conds = self._with_groups(view, self.conditions(view))
+        if any(s.keep for s in self.stages):
+            done = self._fall_back(view, conds, done)
         holds = conds.gather(1, done.clamp(max=count - 1)[:, None])[:, 0]
         event = self._flags(view, "event")[done.clamp(max=count - 1)]
         armed = (view.memory[:, 1] > 0.5) | ~holds  # an event seen not to hold is armed
@@ -512,12 +557,35 @@ class StageTask(TabletopTask):
         view.memory[:, 1] = torch.where(advance, nxt, armed).to(view.memory.dtype)
         view.memory[:, 0] = done.to(view.memory.dtype)
 
+    def _fall_back(self, view: SceneView, conds: torch.Tensor,
+                   done: torch.Tensor) -> torch.Tensor:
+        """The count, fallen back to the first complete `keep` stage that no longer holds
+        (its event arming and the later groups' latches reset with it)."""
+        index = view.constant((self.name, "index"), [float(k) for k in range(len(self.stages))])
+        broken = (self._flags(view, "keep")[None] & ~conds
+                  & (index[None] < done[:, None].to(index.dtype)))
+        first = torch.where(broken, index[None], float(len(self.stages))).amin(dim=1).long()
+        fell = broken.any(dim=1)
+        if self.parts:
+            stale = fell[:, None] & (self._owner(view)[None] >= first[:, None])
+            view.memory[:, 2:] = torch.where(stale, 0.0, view.memory[:, 2:])
+        view.memory[:, 1] = torch.where(fell, 0.0, view.memory[:, 1])
+        return torch.where(fell, first, done)
+
     def success(self, view: SceneView) -> torch.Tensor:
-        final = self.conditions(view)[:, self._flags(view, "final")]
+        conds = self._with_groups(view, self.conditions(view))
+        final = conds[:, self._flags(view, "final")]
         return (self.completed(view) >= len(self.stages)) & final.all(dim=1)
 
     def progress(self, view: SceneView) -> torch.Tensor:
-        return self.completed(view).to(torch.float64) / len(self.stages)
+        done = self.completed(view).to(torch.float64)
+        if self.parts:  # a group's parts count as fractions of its stage
+            owner = self._owner(view)[None]
+            current = (owner == self.completed(view)[:, None]) & self.latched(view)
+            share = view.constant((self.name, "share"), [1.0 / len(s.parts) for s in
+                                                         self.stages for _ in s.parts])
+            done = done + (current.to(share.dtype) * share).sum(dim=1).to(torch.float64)
+        return done / len(self.stages)
 
     def state_obs(self, view: SceneView) -> torch.Tensor:
         stage = self.progress(view).to(view.memory.dtype)[:, None]

@@ -1,0 +1,69 @@
+"""InsertPipette: guide a Pasteur pipette's tip into an Erlenmeyer flask's neck."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import mujoco
+import torch
+
+from dexbench.assets import lab
+from dexbench.assets.objects import ObjectInfo
+from dexbench.envs.task_api import SceneView
+from dexbench.tasks.catalog import register
+from dexbench.tasks.plans import InsertPlan, PinchPlan, SequencePlan, Step
+from dexbench.tasks.templates import Placement, TabletopTask
+
+PIPETTE_RAISED = 0.2  # m: high enough for the pipette, turned tip-down, to clear the flask
+PIPETTE_DROPPED = 0.015  # m: back on the table (or never lifted): grasped again
+
+
+# InsertPen's plan on the pipette: pinched across the barrel just below the bulb (the
+# wider bulb then rests on the tips if the pipette, hanging tip-down, starts to slide),
+# lifted, turned tip-down over the neck and lowered in.
+PIPETTE_PLAN = SequencePlan((
+    Step(PinchPlan("pipette", point=("bulb_end", (0.04, 0.0, 0.0)), depth=0.004, lift=0.25,
+                   level=0.85),
+         until=lambda e, pinch: pinch.carrying & (
+             e.task.lift(e.view, "pipette").cpu().numpy() > PIPETTE_RAISED)),
+    Step(InsertPlan("pipette", "flask", head="tip", shaft="long", synergy="tip_pinch"))),
+    restart=lambda e, experts: (e.task.lift(e.view, "pipette") < PIPETTE_DROPPED).cpu().numpy()
+    | experts[1].stalled)
+
+
+@register
+class InsertPipette(TabletopTask):
+    name = "InsertPipette"
+    category = "contact_rich"
+    instruction = "Put the pipette's tip into the neck of the flask."
+    description = ("Pick up a pipette and guide its tip into the neck of the target "
+                   "glassware.")
+    success_text = ("The pipette tip is centred within 0.02 m (horizontally) of the flask "
+                    "opening and at least 0.01 m below its rim.")
+    episode_seconds = 25.0
+    deviations = ("The paper gives no reset ranges: the pipette's (x -0.30..-0.20) and the "
+                  "flask's (x 0.15..0.20), both y -0.15..0.15, are ours (InsertPen's); the "
+                  "flask is clamped in place (fixed), like InsertPen's holder.",)
+    placements: ClassVar = {
+        "pipette": Placement((-0.30, -0.20), (-0.15, 0.15)),
+        "flask": Placement((0.15, 0.20), (-0.15, 0.15), clearance=0.05),
+    }
+    centred, below = 0.02, 0.01
+    expert = PIPETTE_PLAN
+
+    def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
+        return {"pipette": lab.add_pipette(spec, "pipette"),
+                "flask": lab.add_flask(spec, "flask")}
+
+    def _errors(self, view: SceneView) -> tuple[torch.Tensor, torch.Tensor]:
+        """(N,) horizontal offset of the tip from the opening, and its depth below the rim."""
+        rel = self.point(view, "pipette", "tip") - self.point(view, "flask", "entrance")
+        return rel[:, :2].norm(dim=1), -rel[:, 2]
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        off, depth = self._errors(view)
+        return (off <= self.centred) & (depth >= self.below)
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        off, depth = self._errors(view)
+        return 1.0 - off / 0.5 - (self.below - depth).clamp(min=0.0) / 0.2
