@@ -11,24 +11,17 @@ from dexbench.assets import lab
 from dexbench.assets.objects import ObjectInfo
 from dexbench.envs.task_api import SceneView
 from dexbench.tasks.catalog import register
-from dexbench.tasks.plans import InsertPlan, PinchPlan, SequencePlan, Step
+from dexbench.tasks.contact_rich import pinch_and_insert
 from dexbench.tasks.templates import Placement, TabletopTask
 
 PIPETTE_RAISED = 0.2  # m: high enough for the pipette, turned tip-down, to clear the flask
-PIPETTE_DROPPED = 0.015  # m: back on the table (or never lifted): grasped again
 
 
-# InsertPen's plan on the pipette: pinched across the barrel just below the bulb (the
+# InsertPen's plan kind on the pipette: pinched across the barrel just below the bulb (the
 # wider bulb then rests on the tips if the pipette, hanging tip-down, starts to slide),
 # lifted, turned tip-down over the neck and lowered in.
-PIPETTE_PLAN = SequencePlan((
-    Step(PinchPlan("pipette", point=("bulb_end", (0.04, 0.0, 0.0)), depth=0.004, lift=0.25,
-                   level=0.85),
-         until=lambda e, pinch: pinch.carrying & (
-             e.task.lift(e.view, "pipette").cpu().numpy() > PIPETTE_RAISED)),
-    Step(InsertPlan("pipette", "flask", head="tip", shaft="long", synergy="tip_pinch"))),
-    restart=lambda e, experts: (e.task.lift(e.view, "pipette") < PIPETTE_DROPPED).cpu().numpy()
-    | experts[1].stalled)
+PIPETTE_PLAN = pinch_and_insert("pipette", "flask", ("bulb_end", (0.04, 0.0, 0.0)),
+                                PIPETTE_RAISED)
 
 
 @register

@@ -90,14 +90,19 @@ PEN_RAISED = 0.2  # m: high enough for the pen, turned tip-down, to clear the ho
 # tip hangs well below the hand once turned down (the thumb rises as it closes: the tips
 # are levelled where they nearly meet, at the barrel's sides); lifted, then turned
 # tip-down over the holder and lowered in.
-PEN_PLAN = SequencePlan((
-    Step(PinchPlan("pen", point=("tail", (0.05, 0.0, 0.0)), depth=0.004, lift=0.25,
-                   level=0.85),
-         until=lambda e, pinch: pinch.carrying & (
-             e.task.lift(e.view, "pen").cpu().numpy() > PEN_RAISED)),
-    Step(InsertPlan("pen", "holder", head="tip", shaft="long", synergy="tip_pinch"))),
-    restart=lambda e, experts: (e.task.lift(e.view, "pen") < PEG_DROPPED).cpu().numpy()
-    | experts[1].stalled)
+def pinch_and_insert(obj: str, hole: str, point: tuple, raised: float) -> SequencePlan:
+    """Pinch a slender `obj` across its barrel at `point`, lift it above `raised` (m),
+    turn it tip-down over `hole` and lower it in; dropped or stalled, pinch it again."""
+    return SequencePlan((
+        Step(PinchPlan(obj, point=point, depth=0.004, lift=0.25, level=0.85),
+             until=lambda e, pinch: pinch.carrying & (
+                 e.task.lift(e.view, obj).cpu().numpy() > raised)),
+        Step(InsertPlan(obj, hole, head="tip", shaft="long", synergy="tip_pinch"))),
+        restart=lambda e, experts: (e.task.lift(e.view, obj) < PEG_DROPPED).cpu().numpy()
+        | experts[1].stalled)
+
+
+PEN_PLAN = pinch_and_insert("pen", "holder", ("tail", (0.05, 0.0, 0.0)), PEN_RAISED)
 
 
 @register
