@@ -95,16 +95,23 @@ def _raw_env():
     return env, model, data
 
 
-def test_nut_goes_down_only_when_turned():
+def _nut_over_key(yaw_off: float, above: float):
+    """The raw env with the nut `above` m over the follower's top, turned `yaw_off` from
+    the key's flats; also the follower's body id and its top at rest."""
     _, model, data = _raw_env()
     mujoco.mj_forward(model, data)
     follower = model.body("bolt/follower").id
     top = data.xpos[follower].copy()
     key = data.xmat[follower].reshape(3, 3)[:, 0]
-    yaw = math.atan2(key[1], key[0])
+    yaw = math.atan2(key[1], key[0]) + yaw_off
     adr = int(model.joint("nut/free").qposadr[0])
-    data.qpos[adr : adr + 7] = [*(top + [0, 0, 0.02 + 0.0002]), *_yaw_quat(yaw)]
+    data.qpos[adr : adr + 7] = [*(top + [0, 0, above]), *_yaw_quat(yaw)]
     mujoco.mj_forward(model, data)
+    return model, data, follower, top
+
+
+def test_nut_goes_down_only_when_turned():
+    model, data, follower, top = _nut_over_key(0.0, 0.02 + 0.0002)
     _settle(model, data, 1.0, press=8.0)
     assert abs(data.xpos[model.body("nut").id][2] - 0.02 - data.xpos[follower][2]) < 0.002
     assert data.xpos[follower][2] > top[2] - 0.001, "pressed without turning: it stays up"
@@ -115,15 +122,7 @@ def test_nut_goes_down_only_when_turned():
 
 
 def test_nut_with_flats_crossed_sits_on_the_key():
-    _, model, data = _raw_env()
-    mujoco.mj_forward(model, data)
-    follower = model.body("bolt/follower").id
-    top = data.xpos[follower].copy()
-    key = data.xmat[follower].reshape(3, 3)[:, 0]
-    yaw = math.atan2(key[1], key[0]) + math.pi / 6
-    adr = int(model.joint("nut/free").qposadr[0])
-    data.qpos[adr : adr + 7] = [*(top + [0, 0, 0.012 + 0.02 + 0.001]), *_yaw_quat(yaw)]
-    mujoco.mj_forward(model, data)
+    model, data, _, top = _nut_over_key(math.pi / 6, 0.012 + 0.02 + 0.001)
     _settle(model, data, 0.5, press=2.0)
     height = data.xpos[model.body("nut").id][2] - 0.02 - top[2]
     assert height > 0.010, "the hex bore does not go over the key 30 deg off"
