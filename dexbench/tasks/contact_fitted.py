@@ -12,11 +12,9 @@ from dexbench.assets import fasteners
 from dexbench.assets.objects import ObjectInfo
 from dexbench.envs.task_api import SceneView
 from dexbench.tasks.catalog import register
-from dexbench.tasks.plans import GraspPlan, InsertPlan, SequencePlan, Step
+from dexbench.tasks.contact_rich import lift_then_insert
+from dexbench.tasks.plans import GraspPlan, InsertPlan
 from dexbench.tasks.templates import Placement, TabletopTask
-
-RAISED = 0.03  # m: the held part is clear of the table, the hand may turn it
-DROPPED = 0.015  # m: back on the table (or stalled lining up), it is grasped again
 
 
 def _axial_lateral(view: SceneView, point: torch.Tensor, target: torch.Tensor,
@@ -29,13 +27,9 @@ def _axial_lateral(view: SceneView, point: torch.Tensor, target: torch.Tensor,
 
 # Grasped from above round its rim, lifted, lowered onto the shaft bore first and pushed
 # down onto the column's seat; dropped or stalled, grasped again.
-GEAR_PLAN = SequencePlan((
-    Step(GraspPlan("gear", shift=(0.0, 0.0, 0.0), yaw="none", lift=0.1, settle=0.5),
-         until=lambda e, grasp: grasp.carrying & (
-             e.task.lift(e.view, "gear").cpu().numpy() > RAISED)),
-    Step(InsertPlan("gear", "base", head="hub", shaft="down", target="seat", bore="shaft"))),
-    restart=lambda e, experts: (e.task.lift(e.view, "gear") < DROPPED).cpu().numpy()
-    | experts[1].stalled)
+GEAR_PLAN = lift_then_insert(
+    GraspPlan("gear", shift=(0.0, 0.0, 0.0), yaw="none", lift=0.1, settle=0.5),
+    InsertPlan("gear", "base", head="hub", shaft="down", target="seat", bore="shaft"))
 
 
 @register
@@ -78,14 +72,10 @@ class InsertGear(TabletopTask):
 # Held from above over the brick's rear half, the fingers pointing back along it, away
 # from the pin (pointing forward, they reach the socket before the pin is home); lifted a
 # little, lined up with the receptacle and pushed in.
-PLUG_PLAN = SequencePlan((
-    Step(GraspPlan("plug", point="grip", shift=(0.0, 0.0, -0.005), yaw="body",
-                   yaw_offset=math.pi, lift=0.1, settle=0.5),
-         until=lambda e, grasp: grasp.carrying & (
-             e.task.lift(e.view, "plug").cpu().numpy() > RAISED)),
-    Step(InsertPlan("plug", "socket", head="tip", shaft="pin"))),
-    restart=lambda e, experts: (e.task.lift(e.view, "plug") < DROPPED).cpu().numpy()
-    | experts[1].stalled)
+PLUG_PLAN = lift_then_insert(
+    GraspPlan("plug", point="grip", shift=(0.0, 0.0, -0.005), yaw="body",
+              yaw_offset=math.pi, lift=0.1, settle=0.5),
+    InsertPlan("plug", "socket", head="tip", shaft="pin"))
 
 
 @register

@@ -32,17 +32,26 @@ def _hole_yaw(env) -> np.ndarray:
     return body_yaw(env.view.body_quat("hole").cpu().numpy())
 
 
+def lift_then_insert(take: GraspPlan | PinchPlan, insert: InsertPlan,
+                     raised: float = PEG_RAISED) -> SequencePlan:
+    """Pick the part up (`take`), lift it above `raised` (m), then `insert` it; dropped
+    back onto the table or stalled lining up, pick it up again."""
+    obj = take.obj
+    return SequencePlan((
+        Step(take, until=lambda e, held: held.carrying & (
+            e.task.lift(e.view, obj).cpu().numpy() > raised)),
+        Step(insert)),
+        restart=lambda e, experts: (e.task.lift(e.view, obj) < PEG_DROPPED).cpu().numpy()
+        | experts[1].stalled)
+
+
 # Across the shaft, near the grip end: the hand's width leaves the head free to go in.
 # Held, lifted a little, then inserted; dropped or stalled, grasped again.
-PEG_PLAN = SequencePlan((
-    Step(GraspPlan("peg", point=("grip", (0.04, 0.0, 0.0)), shift=(0.0, 0.0, -0.005), yaw="body",
-                   yaw_offset=turnable_offset("peg", _hole_yaw, (math.pi / 2, -math.pi / 2)),
-                   lift=0.1, settle=0.5),
-         until=lambda e, grasp: grasp.carrying & (
-             e.task.lift(e.view, "peg").cpu().numpy() > PEG_RAISED)),
-    Step(InsertPlan("peg", "hole"))),
-    restart=lambda e, experts: (e.task.lift(e.view, "peg") < PEG_DROPPED).cpu().numpy()
-    | experts[1].stalled)
+PEG_PLAN = lift_then_insert(
+    GraspPlan("peg", point=("grip", (0.04, 0.0, 0.0)), shift=(0.0, 0.0, -0.005), yaw="body",
+              yaw_offset=turnable_offset("peg", _hole_yaw, (math.pi / 2, -math.pi / 2)),
+              lift=0.1, settle=0.5),
+    InsertPlan("peg", "hole"))
 
 
 @register
@@ -93,13 +102,9 @@ PEN_RAISED = 0.2  # m: high enough for the pen, turned tip-down, to clear the ho
 def pinch_and_insert(obj: str, hole: str, point: tuple, raised: float) -> SequencePlan:
     """Pinch a slender `obj` across its barrel at `point`, lift it above `raised` (m),
     turn it tip-down over `hole` and lower it in; dropped or stalled, pinch it again."""
-    return SequencePlan((
-        Step(PinchPlan(obj, point=point, depth=0.004, lift=0.25, level=0.85),
-             until=lambda e, pinch: pinch.carrying & (
-                 e.task.lift(e.view, obj).cpu().numpy() > raised)),
-        Step(InsertPlan(obj, hole, head="tip", shaft="long", synergy="tip_pinch"))),
-        restart=lambda e, experts: (e.task.lift(e.view, obj) < PEG_DROPPED).cpu().numpy()
-        | experts[1].stalled)
+    return lift_then_insert(
+        PinchPlan(obj, point=point, depth=0.004, lift=0.25, level=0.85),
+        InsertPlan(obj, hole, head="tip", shaft="long", synergy="tip_pinch"), raised)
 
 
 PEN_PLAN = pinch_and_insert("pen", "holder", ("tail", (0.05, 0.0, 0.0)), PEN_RAISED)
