@@ -230,7 +230,8 @@ class GraspExpert:
         # Close once the hand itself is there: an arm may trail its command.
         palm, _ = self._palm()
         arrived = ((np.linalg.norm(self.pos - self.grasp_pos, axis=1) < 0.005)
-                   & (np.linalg.norm(palm - self.grasp_pos, axis=1) < ARRIVED))
+                   & (np.linalg.norm(palm - self.grasp_pos, axis=1)
+                      < (ARRIVED if self.plan.arrive is None else self.plan.arrive)))
         self._advance(descend & (arrived | (self.timer > 2.5)), Phase.CLOSE)
 
         close = phase == Phase.CLOSE
@@ -289,7 +290,8 @@ class GraspExpert:
         target_pos[done], target_rot[done] = self.pos[done], self.rot[done]
 
         careful = (phase == Phase.DESCEND) | (phase == Phase.CARRY)
-        speed = np.where(careful, CAREFUL_SPEED, SPEED)[:, None] * self._dt
+        slow = CAREFUL_SPEED if self.plan.carry_speed is None else self.plan.carry_speed
+        speed = np.where(careful, slow, SPEED)[:, None] * self._dt
         self.pos, self.rot = step_towards(self.pos, self.rot, target_pos, target_rot,
                                           speed, TURN_RATE * self._dt)
         command = HandCommand(self.pos, self.rot, self.closure, self.synergy)

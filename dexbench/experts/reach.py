@@ -24,7 +24,8 @@ ARRIVED = 0.01  # m
 
 
 class ReachExpert:
-    """Straight to `plan.target(env, start)` at `SPEED`, hand open."""
+    """Straight to `plan.target(env, start)` at `plan.speed` (default `SPEED`), hand
+    open."""
 
     def __init__(self, env: DexEnv, plan: ReachPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
@@ -56,8 +57,9 @@ class ReachExpert:
 
     def act(self) -> torch.Tensor:
         pos, rot = self._goal()
+        speed = SPEED if self.plan.speed is None else self.plan.speed
         self.pos, self.rot = step_towards(self.pos, self.rot, pos, rot,
-                                          SPEED * self.env.control_dt,
+                                          speed * self.env.control_dt,
                                           TURN_RATE * self.env.control_dt)
         command = HandCommand(self.pos, self.rot, np.zeros(self.env.num_envs))
         return self.adapter.actions({self.side: command})

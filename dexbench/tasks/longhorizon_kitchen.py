@@ -24,7 +24,18 @@ from dexbench.tasks.articulation_hinged import hook_and_swing
 from dexbench.tasks.catalog import register
 from dexbench.tasks.functional import body_pour
 from dexbench.tasks.functional_tools import _across_bar
-from dexbench.tasks.plans import EnvFn, GraspPlan, SequencePlan, Step, TurnPlan, object_point
+from dexbench.tasks.plans import (
+    EnvFn,
+    GraspPlan,
+    PourPlan,
+    ReachPlan,
+    SequencePlan,
+    Step,
+    SwingPlan,
+    TurnPlan,
+    object_point,
+    task_goal,
+)
 from dexbench.tasks.predicates import dist, tilt_deg
 from dexbench.tasks.templates import Placement, Stage, StageTask
 
@@ -119,15 +130,99 @@ def _fraction_at_least(joint: str, value: float) -> Callable[[DexEnv, object], n
     return done
 
 
-# MicrowaveFood's expert (so far): the fridge door hooked and swung a third open, swung
-# back shut, and the microwave's door swung open (`SwingPlan`, as OpenCabinet's).
-# Taking the food out, placing it, closing the microwave and the dial are not planned yet.
+# MicrowaveFood's geometry, in the fridge's base frame (front face at x = 0.15, the door
+# hinged at y = -0.17, the microwave's side): `FRIDGE_CLEAR` is in front of the free
+# edge of the door swung open 88 deg (0.34 m wide) with the hand and food clear of it,
+# `FRIDGE_BESIDE` past the open door on the microwave's side.
+FRIDGE_CLEAR, FRIDGE_BESIDE, FOOD_CARRIED = 0.66, -0.45, 0.07  # m
+FOOD_GRIP, FOOD_SHIFT = (-0.05, 0.0, 0.0), (0.0, 0.0, -0.015)  # its far end, palm low
+GRASP_HOVER = 0.10  # m: the palm height over its grasp pose the grasp comes down from
+TRAVEL = 0.5  # m/s: the open hand, the swinging doors and the held food (30 s for it all)
+
+
+def _swing(obj: str) -> SwingPlan:
+    """`hook_and_swing` on `obj`'s door, quicker: the hook settles 0.3 s, swings at
+    0.45 m/s."""
+    plan = hook_and_swing(obj, f"{obj}/door")
+    return dataclasses.replace(plan, grasp=dataclasses.replace(plan.grasp, settle=0.3,
+                                                               carry_speed=0.45))
+
+
+def _moved(body: str, by: Vec3) -> Callable[[DexEnv, np.ndarray], np.ndarray]:
+    """A reach target: `by` from where the step began, in `body`'s frame."""
+    def where(env: DexEnv, start: np.ndarray) -> np.ndarray:
+        return start + (env.view.point_pos(body, by) - env.view.body_pos(body)).cpu().numpy()
+    return where
+
+
+def _over_food(out: float) -> Callable[[DexEnv, np.ndarray], np.ndarray]:
+    """A reach target for the palm, level, `out` m in front of where the food's
+    palm-down grasp (fingers into the fridge) comes down from: the hand goes in under
+    the fridge's top, not down through it."""
+    def where(env: DexEnv, _: np.ndarray) -> np.ndarray:
+        reach, _, drop = env.embodiment.hand.grasp_offset
+        grip = tuple(g + s for g, s in zip(FOOD_GRIP, FOOD_SHIFT, strict=True))
+        food = env.view.point_pos("food", grip).cpu().numpy()
+        ahead = env.view.axis("fridge", (1.0, 0.0, 0.0)).cpu().numpy()
+        return food + (reach + out) * ahead + [0.0, 0.0, drop + GRASP_HOVER]
+    return where
+
+
+def _fridge_to_microwave(env: DexEnv) -> np.ndarray:
+    """The food's carry target: straight out of the fridge to in front of its open door,
+    across to beside it on the microwave's side, then in through the microwave's open
+    front (`through_front`) once lined up in front of the cavity."""
+    view = env.view
+    held = view.body_pos("food")
+    fridge = local_coords(view, "fridge", held).cpu().numpy()
+    oven = local_coords(view, "microwave", held).cpu().numpy()
+    lo, hi = (env.task.objects["microwave"].points[f"cavity_{k}"][1] for k in ("lo", "hi"))
+    inside = through_front("microwave", "cavity", "food")(env)
+    out = view.point_pos("fridge", (FRIDGE_CLEAR, 0.0, FOOD_CARRIED)).cpu().numpy()
+    beside = view.point_pos("fridge", (FRIDGE_CLEAR, FRIDGE_BESIDE, FOOD_CARRIED)).cpu().numpy()
+    in_fridge = (fridge[:, 0] < FRIDGE_CLEAR - 0.03) & (fridge[:, 1] > FRIDGE_BESIDE / 2)
+    behind_door = fridge[:, 1] > FRIDGE_BESIDE + 0.05
+    lined_up = ((oven[:, 0] < hi[0] + 0.16)
+                & (np.abs(oven[:, 1] - (lo[1] + hi[1]) / 2) < 0.04))
+    goal = np.where(behind_door[:, None], beside, inside)
+    goal = np.where(in_fridge[:, None], out, goal)
+    return np.where(lined_up[:, None], inside, goal)
+
+
+# MicrowaveFood's expert. The stages are states checked in order, so the microwave is
+# opened first (it still counts once the fridge is shut) and the food goes straight
+# from the fridge into it: one grasp, no detour round a closed fridge. The microwave's
+# door is hooked and swung 0.9 open (`SwingPlan`, as OpenMicrowave's) and the hand
+# leaves along it, towards the robot (across it, it would push it shut); the fridge's
+# door is swung 0.8 open (88 deg: then clear of its opening). Its handle faces the
+# microwave, so the hand rises off the bar, goes round the door's free edge palm-down
+# (fingers into the fridge) and in level under the fridge's top. It holds the food
+# from above by its far end (hanging tipped, as OvenBake's salmon), carries it out,
+# round the open door and in through the microwave's front (`through_front`), lets
+# go and backs out; pushes both doors' outer faces shut (as OvenBake's oven door),
+# rises and pushes the front dial's bar round (as RotateKnob's). Floating Shadow: 20/20,
+# done after 27 s of the 30 on average, hence the quicker moves (`TRAVEL`, `_swing`);
+# with no slack left, a lost grip or a slow swing ends it (floating Allegro: 0/4).
 MICROWAVE_PLAN = SequencePlan((
-    Step(hook_and_swing("fridge", "fridge/door"),
-         until=_fraction_at_least("fridge/door", 0.3)),
-    Step(dataclasses.replace(hook_and_swing("fridge", "fridge/door"), direction=-1.0),
+    Step(_swing("microwave"), until=_fraction_at_least("microwave/door", 0.9)),
+    Step(ReachPlan(_moved("microwave", (0.3, 0.0, 0.05)), speed=TRAVEL)),
+    Step(_swing("fridge"), until=_fraction_at_least("fridge/door", 0.8)),
+    Step(ReachPlan(lambda _, start: start + [0.0, 0.0, 0.10], speed=TRAVEL)),
+    Step(ReachPlan(lambda env, _: at("fridge", (0.8, -0.30, 0.24))(env), yaw=0.0,
+                   speed=TRAVEL)),
+    Step(ReachPlan(_over_food(0.6), speed=TRAVEL)),
+    Step(ReachPlan(_over_food(0.0), speed=TRAVEL)),
+    Step(GraspPlan("food", point=FOOD_GRIP, shift=FOOD_SHIFT, yaw="body",
+                   yaw_offset=math.pi, target=_fridge_to_microwave, carry_high=False,
+                   carry_speed=TRAVEL, release=True, settle=0.5, squeeze=2.0)),
+    Step(ReachPlan(_moved("microwave", (0.22, 0.0, 0.02)), speed=TRAVEL)),
+    Step(TurnPlan("fridge", "handle", hinge="fridge/door", direction=-1.0, push_speed=0.3),
          until=joint_below("fridge/door", DOOR_SHUT / 2)),
-    Step(hook_and_swing("microwave", "microwave/door"))))
+    Step(TurnPlan("microwave", ("handle", (-0.03, 0.0, 0.10)), hinge="microwave/door",
+                  direction=-1.0, push_speed=0.3),
+         until=joint_below("microwave/door", DOOR_SHUT / 2)),
+    Step(ReachPlan(lambda _, start: start + [0.0, 0.0, 0.15], speed=TRAVEL)),
+    Step(TurnPlan("microwave", "dial0", hinge="microwave/dial0"))))
 
 
 @register
@@ -144,7 +239,10 @@ class MicrowaveFood(KitchenStageTask):
     deviations = ("Ours where the paper gives no number: a door is closed within 5° of "
                   "shut; the food's goal is the centre of the microwave's cavity floor. The "
                   "food placed, the microwave closed and the dial turned must still hold "
-                  "over the 10-step success window; the dial must newly cross 18°.",)
+                  "over the 10-step success window; the dial must newly cross 18°. Each "
+                  "stage but the dial is a state checked in order, as the paper lists "
+                  "them: a microwave door opened before the fridge is shut counts once the "
+                  "fridge is shut.",)
     episode_seconds = 30.0
     stages = (Stage("open_fridge"), Stage("close_fridge"), Stage("open_microwave"),
               Stage("place_food", final=True), Stage("close_microwave", final=True),
@@ -191,12 +289,18 @@ class MicrowaveFood(KitchenStageTask):
         return targets[torch.arange(len(stage), device=stage.device), stage]
 
 
-# CookFood's expert: each vessel is held round its body as FunctionalPourCan's and
-# carried with its outlet over the pot's mouth, tipping as it rises; once its pour has
-# counted it is carried back over where it stood and let go there, clear of the rest.
+# CookFood's expert: the can, then the bottle, each held round its body from the side
+# (`CAN_POUR`, `BOTTLE_POUR`) and carried with its outlet 8 cm over the pot's mouth,
+# tipping at 1.5 rad/s as it rises; once its pour has counted it is carried off and let
+# go (it may fall over there): the can towards the robot, clear of the bottle's and the
+# pot's grasps, the bottle beyond where it stood, so it falls clear of the pot's path.
 # The pot is then carried by its handle onto the burner as GraspPan's pan, let go just
-# above the grate, and the knob's bar is pushed round as RotateKnob's. (Not solved yet:
-# the first pour counts only after 9-12 s of the 20, and the bottle's grasp slips.)
+# above the grate, and the knob's bar is pushed round as RotateKnob's; everything is
+# carried at 0.3 m/s. On floating Shadow the pours count at 4-5 s and 9.5-11 s, the
+# pot is on the burner at 16-18 s and the knob turned at 17.5-20 s of the 20: little
+# slack. What still fails (1 to 3 episodes in 10): the pot turns about its handle in
+# the grip and drops on the way (its heavy end hangs 15 cm out), or the last stage runs
+# out of time.
 POUR_ABOVE = 0.05  # m the outlet is held above what it pours onto (within 0.10 counts)
 TIP_HIGHER = 0.10  # m higher the outlet is held while the vessel tips
 PARK_ABOVE = 0.12  # m above its reset spot a poured vessel's outlet is carried back to
@@ -212,12 +316,14 @@ def _poured(k: int) -> EnvFn:
     return done
 
 
-def _pour_target(vessel: str, over: EnvFn, k: int, above: float) -> EnvFn:
+def _pour_target(vessel: str, over: EnvFn, k: int, above: float,
+                 park: Vec3 = (0.0, 0.0, 0.0)) -> EnvFn:
     """`above` m over `over(env)` (`TIP_HIGHER` m higher until the vessel has tipped
     past `POUR_TILT`: its base swings down as it tips) until the pour counts, then back
-    over the vessel's reset spot."""
+    over the vessel's reset spot (moved by `park`, m)."""
     def where(env: DexEnv) -> np.ndarray:
-        home = env.view.initial_body_pos[vessel].cpu().numpy() + [0.0, 0.0, PARK_ABOVE]
+        home = (env.view.initial_body_pos[vessel].cpu().numpy() + park
+                + [0.0, 0.0, PARK_ABOVE])
         up = env.view.axis(*env.task.objects[vessel].axes["up"])
         tipped = tilt_deg(up).cpu().numpy() >= POUR_TILT
         pour = over(env) + (above + np.where(tipped, 0.0, TIP_HIGHER))[:, None] * [0, 0, 1]
@@ -225,22 +331,26 @@ def _pour_target(vessel: str, over: EnvFn, k: int, above: float) -> EnvFn:
     return where
 
 
-def _parked(vessel: str, outlet: str, k: int) -> EnvFn:
-    """Poured and carried back over its reset spot: let go."""
+def _parked(vessel: str, outlet: str, k: int, park: Vec3 = (0.0, 0.0, 0.0)) -> EnvFn:
+    """Poured and carried back over its reset spot (moved by `park`, m): let go."""
     def done(env: DexEnv) -> np.ndarray:
-        home = env.view.initial_body_pos[vessel].cpu().numpy()
+        home = env.view.initial_body_pos[vessel].cpu().numpy() + park
         spout = env.task.point(env.view, vessel, outlet).cpu().numpy()
         return _poured(k)(env) & (np.linalg.norm((spout - home)[:, :2], axis=1) < PARK_NEAR)
     return done
 
 
 def pour_step(vessel: str, outlet: str, over: EnvFn, k: int,
-              above: float = POUR_ABOVE) -> Step:
+              above: float = POUR_ABOVE, pour: PourPlan | None = None,
+              park: Vec3 = (0.0, 0.0, 0.0), **changes: object) -> Step:
     """Pour `vessel` (its `outlet`) `above` m over `over(env)` until group part `k`
-    counts, then set it back down; the next step starts once it is no longer carried."""
-    plan = body_pour(vessel, outlet)
-    grasp = dataclasses.replace(plan.grasp, target=_pour_target(vessel, over, k, above),
-                                let_go=_parked(vessel, outlet, k))
+    counts, then set it back down `park` (m) from where it stood; the next step starts
+    once it is no longer carried. `pour` holds and tips it (default `body_pour`'s);
+    `changes` replace fields of its `GraspPlan` (its speed, its settling)."""
+    plan = body_pour(vessel, outlet) if pour is None else pour
+    grasp = dataclasses.replace(plan.grasp,
+                                target=_pour_target(vessel, over, k, above, park),
+                                let_go=_parked(vessel, outlet, k, park), **changes)
     return Step(dataclasses.replace(plan, grasp=grasp),
                 until=lambda e, r: _poured(k)(e) & ~r.grasp.carrying)
 
@@ -252,13 +362,36 @@ def _on_burner(env: DexEnv) -> np.ndarray:
     return (np.linalg.norm(off[:, :2], axis=1) < BURNER_ACROSS) & (off[:, 2] < BURNER_ABOVE)
 
 
+# A vessel's grasp closes once the palm is within 2 cm of it (the floating hand sags
+# about 1.5 cm short and would wait out the descent's time-out; the pot's handle, closed
+# on that early, turns in the grip), settles 0.5 s and is carried at 0.3 m/s.
+QUICK = {"arrive": 0.02, "settle": 0.5, "carry_speed": 0.3}
+# The can as `body_pour` holds it, but from its -x-y side (the fingers pointing away from
+# the bottle, which they would knock over), tipped at 1.5 rad/s and all fingers closed:
+# no rim is kept clear here, and the straight index finger would dip into the pot.
+CAN_POUR = dataclasses.replace(
+    body_pour("can", "lip"), turn_rate=1.5, overrides=(),
+    grasp=dataclasses.replace(body_pour("can", "lip").grasp, yaw_offset=-math.pi / 4))
+# The 18 cm, 0.2 kg bottle from its -x side (the forearm clear of the pot), at 7 cm
+# (below its centre of mass), thumb closed round it (`power`): with the thumb open
+# (`hook`) it rolls out of the fingers as the hand tips.
+BOTTLE_POUR = PourPlan(
+    GraspPlan("bottle", point=(0.0, 0.0, 0.07), shift=(0.0, 0.0, -0.015), yaw="none",
+              yaw_offset=-math.pi / 2, side=True, synergy="power", target=task_goal,
+              goal_point="top"),
+    tilt=2.0, turn_rate=1.5, squeeze=2.0, grasp_turn=0.17)
+POUR_HIGHER = 0.08  # m: an outlet over the pot's mouth (the fingers below clear the rim)
+CAN_PARK = (-0.22, -0.08, 0.0)  # m from its reset spot: towards the robot, off every path
+BOTTLE_PARK = (0.0, 0.12, 0.0)  # m: it falls over as let go, away from the pot's path
 COOK_PLAN = SequencePlan((
-    pour_step("can", "lip", object_point("pot", "mouth"), 1),
-    pour_step("bottle", "top", object_point("pot", "mouth"), 0),
+    pour_step("can", "lip", object_point("pot", "mouth"), 1, POUR_HIGHER, CAN_POUR,
+              CAN_PARK, **QUICK),
+    pour_step("bottle", "top", object_point("pot", "mouth"), 0, POUR_HIGHER, BOTTLE_POUR,
+              BOTTLE_PARK, **QUICK),
     Step(GraspPlan("pot", point=("handle", (-0.03, 0.0, -0.014)), shift=(0.03, 0.0, -0.03),
                    yaw="body", yaw_offset=_across_bar, target=object_point("stove", "target"),
                    goal_point=("centre", (0.0, 0.0, -0.005)), release=True,
-                   let_go=_on_burner)),
+                   let_go=_on_burner, carry_speed=0.3)),
     Step(TurnPlan("knob", "tip", direction=0.0, lean=1.2))))
 
 
@@ -347,7 +480,8 @@ def through_front(holder: str, space: str, obj: str, out: float = 0.12,
                   up: float = 0.04, near: float = 0.03) -> EnvFn:
     """A carry target for object `obj` into `holder`'s box `space` through its open front
     (+x of the box's body): `out` m in front of the box's middle, `up` m over its floor,
-    then straight in once within `near` of that (never down through its top)."""
+    then straight in once within `near` of that, for as long as it stays past that
+    point and within `2 near` of the line in (never down through its top)."""
     def where(env: DexEnv) -> np.ndarray:
         body, lo = env.task.objects[holder].points[f"{space}_lo"]
         hi = env.task.objects[holder].points[f"{space}_hi"][1]
@@ -355,29 +489,64 @@ def through_front(holder: str, space: str, obj: str, out: float = 0.12,
         inside = env.view.point_pos(body, mid).cpu().numpy()
         front = env.view.point_pos(body, (hi[0] + out, mid[1], mid[2])).cpu().numpy()
         held = env.view.body_pos(env.task.objects[obj].root).cpu().numpy()
-        lined_up = np.linalg.norm(held - front, axis=1) < near
         ahead = env.view.axis(body, (1.0, 0.0, 0.0)).cpu().numpy()
-        entering = ((held - inside) * ahead).sum(axis=1) < out - near
+        rel = held - front
+        along = (rel * ahead).sum(axis=1)
+        aside = np.linalg.norm(rel - along[:, None] * ahead, axis=1)
+        lined_up = np.linalg.norm(rel, axis=1) < near
+        entering = (along < 0.0) & (aside < 2 * near)
         return np.where((lined_up | entering)[:, None], inside, front)
     return where
 
 
 SEASON_ABOVE = 0.08  # m over the salmon's centre: the tipped jar clears the table
+# m (world) from its reset spot where each poured jar is set down (let go tipped, it
+# falls over, away from the robot): the salt nearer the robot, the pepper right of the
+# oven: clear of the salmon's grasp, its way to the oven, the door's sweep and the
+# other jar.
+SALT_AWAY, PEPPER_AWAY = (-0.25, 0.0, 0.0), (0.12, -0.05, 0.0)
+DOOR_PUSH = ("handle", (-0.03, 0.0, 0.10))  # the door's outer face, 6 cm below its top
+SET_IN = 0.10  # m behind the oven's front the salmon's centre is let go: all of it in
+DOOR_HOLD = 0.5  # s the pushed door is held shut before the hand lets it be
+DIAL_CLEAR = 0.15  # m the hand rises from the shut door before going over to the dial
 
 
 def _salmon(env: DexEnv) -> np.ndarray:
     return env.view.body_pos("salmon").cpu().numpy()
 
 
-# OvenBake's expert (so far): salt, then pepper, poured over the salmon as CookFood's
-# vessels; the salmon is then carried (over the jars) to in front of the open oven and
-# in, and set down on the cavity's floor (the flat fillet is often lost from the grasp:
-# not solved yet). Closing the door and turning the knob are not planned yet.
+def _deep_inside(holder: str, space: str, obj: str, depth: float) -> EnvFn:
+    """Object `obj`'s centre in `holder`'s box `space`, `depth` m or more behind its open
+    front (+x of the box's body): far enough in to let go."""
+    def done(env: DexEnv) -> np.ndarray:
+        body, _ = env.task.objects[holder].points[f"{space}_lo"]
+        front = env.task.objects[holder].points[f"{space}_hi"][1][0]
+        local = local_coords(env.view, body, env.view.body_pos(env.task.objects[obj].root))
+        return (env.task.inside(env.view, obj, holder, space)
+                & (local[:, 0] <= front - depth)).cpu().numpy()
+    return done
+
+
+# OvenBake's expert: salt, then pepper, poured over the salmon as CookFood's vessels
+# (both count by ~20 s) and each set down out of the way (let go tipped, a jar falls
+# over: beside the salmon it stops the hand, in the door's sweep it stops the door). The
+# salmon is held from above by its far end (across its width the open thumb lands on
+# it; it hangs tipped some 30 deg), carried to in front of the open oven, 8 cm over the
+# cavity's floor (lower, its near end catches the floor's edge), straight in and let go
+# 10 cm behind the front. The door's outer face is pushed shut (as CleanTable's lid) and
+# held there until it has stopped bouncing, the hand rises clear of the oven's top edge,
+# and the dial's bar is pushed round from above (as RotateKnob's); done by ~36 s. Still
+# failing (4 of 20 at seed 0): a pepper pour that never counts, a pepper jar dropped
+# beside the salmon, a door stopped some 15 deg short of shut.
 OVEN_PLAN = SequencePlan((
-    pour_step("salt", "lip", _salmon, 0, SEASON_ABOVE),
-    pour_step("pepper", "lip", _salmon, 1, SEASON_ABOVE),
-    Step(GraspPlan("salmon", target=through_front("oven", "cavity", "salmon"),
-                   release=True))))
+    pour_step("salt", "lip", _salmon, 0, SEASON_ABOVE, park=SALT_AWAY),
+    pour_step("pepper", "lip", _salmon, 1, SEASON_ABOVE, park=PEPPER_AWAY),
+    Step(GraspPlan("salmon", target=through_front("oven", "cavity", "salmon", up=0.08),
+                   release=True, let_go=_deep_inside("oven", "cavity", "salmon", SET_IN))),
+    Step(TurnPlan("oven", DOOR_PUSH, hinge="oven/door", direction=-1.0),
+         until=joint_below("oven/door", DOOR_SHUT / 2), hold=DOOR_HOLD),
+    Step(ReachPlan(lambda _, start: start + [0.0, 0.0, DIAL_CLEAR])),
+    Step(TurnPlan("oven", "dial0", hinge="oven/dial0"))))
 
 
 @register

@@ -111,6 +111,10 @@ class GraspPlan:
     in over the object. With `commanded_hand` the mount's IK takes the hand's own joints
     (a wrist) at their commanded targets, not as measured (`ActionAdapter`): a heavy
     tool swings a weak wrist, and chasing each swing with the mount flings it out.
+    `arrive` (m) replaces how close the palm must come to the grasp pose to close (a
+    floating hand that sags a little short of it otherwise closes only after the
+    descent's time-out), and `carry_speed` (m/s) the careful speed of the descent and
+    the carry (an object held firmly can be carried faster). None keeps the script's.
     """
 
     obj: str
@@ -133,6 +137,8 @@ class GraspPlan:
     wait: EnvFn | None = None
     back_off: float = 0.06
     commanded_hand: bool = False
+    arrive: float | None = None
+    carry_speed: float | None = None
 
 
 @dataclass(frozen=True)
@@ -422,11 +428,14 @@ class ReachPlan:
     """Move the open hand to `target(env, start) -> (N, 3)`, `start` being where the palm
     was when the step began. Without `yaw` the palm goes there keeping its orientation;
     with it, the hand turns palm-down, fingers along `yaw` (rad) tilted down by `pitch`,
-    and its finger tips (their mean, thumb left out) go there. Done once arrived."""
+    and its finger tips (their mean, thumb left out) go there. Done once arrived.
+    `speed` (m/s) replaces the script's: a long move through free space in a task with
+    a tight horizon."""
 
     target: Callable[[DexEnv, np.ndarray], np.ndarray]
     yaw: float | None = None
     pitch: float = 0.0
+    speed: float | None = None
 
 
 @dataclass(frozen=True)
@@ -469,10 +478,12 @@ Until = Callable[[DexEnv, Any], np.ndarray]
 @dataclass(frozen=True)
 class Step:
     """One step of a sequence: `plan` runs until `until(env, its expert) -> (N,) bool`
-    (default: its expert's `finished`)."""
+    (default: its expert's `finished`) has held for `hold` seconds (a door pushed shut
+    that must have stopped bouncing before the hand lets it be)."""
 
     plan: Any
     until: Until | None = None
+    hold: float = 0.0
 
 
 @dataclass(frozen=True)
