@@ -64,6 +64,14 @@ class HandSpec:
     best turns from square to the fingers, for `power` to hold it against a heavy end's
     twist: the fingers' lengths and spread differ per hand, so the line they wrap firmest
     does too. Searched on GraspPan's handle (0.1 rad steps); 0: not searched."""
+    vessel_shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Added (m, hand frame) to the `shift` of a pour's side grasp round a vessel's body:
+    the plans' shifts are the Shadow hand's, and a hand with a thicker palm or longer
+    fingers would start inside the vessel or hold it out of its fingers' hook."""
+    vessel_turn: float = 0.0
+    """Added (rad) to a pour's `grasp_turn` (about the palm normal) for a side grasp round a
+    vessel's body: a hand whose fingers lie far apart reaches the rim with its middle
+    finger while its lowest finger rests on the table, unless its fingers slant down."""
     retarget: RetargetSpec = RetargetSpec()
 
 
@@ -215,6 +223,15 @@ HANDS: dict[str, HandSpec] = {
         name="leap",
         retarget=RetargetSpec(tips=(4, 8, 12, 16), scale=1.38),
         grasp_offset=(0.02, -0.035, 0.069),
+        # Round a vessel: with the plans' shift (the Shadow hand's) the open fingers start
+        # 2 cm inside it, and with the fingers level the middle one curls onto a 10 cm
+        # cup's rim while the ring finger rests on the table. Held 1 cm further out along
+        # the fingers, 1 cm lower in the hand, 3 cm further from the palm, the fingers
+        # slanted 0.15 rad down: searched on GraspCup (30 random candidates on 4 envs,
+        # then 14 near the best on 6 others); 10 episodes each, GraspCup 0.1 -> 0.5,
+        # FunctionalPourCan 0 -> 0.5, FunctionalPourMug 0 -> 0.4 (GraspBleach stays 0).
+        vessel_shift=(0.01, 0.01, 0.03),
+        vessel_turn=-0.15,
         collection="leap_hand",
         sides={"right": _leap_side("right_hand"), "left": _leap_side("left_hand")},
         synergies={

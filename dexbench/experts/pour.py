@@ -10,7 +10,9 @@ wrist that turn is the innermost hinge alone, so it never runs into the outer hi
 
 The side grasp holds the vessel no lower in the hand than keeps the open fingers (from
 the hand's own geometry) above the table, so a broad hand (LEAP) is not stopped by the
-table short of the vessel; hands as narrow as the Shadow hand keep their plan.
+table short of the vessel; hands as narrow as the Shadow hand keep their plan. A hand
+whose size the plans' body grasp does not fit moves it by its own `HandSpec.vessel_shift`
+and `vessel_turn` (LEAP's).
 """
 
 from __future__ import annotations
@@ -43,6 +45,11 @@ class PourExpert:
         self.grasp = GraspExpert(env, dataclasses.replace(plan.grasp, synergy=SQUEEZE,
                                                           standoff=None), side)
         self.grasp.offset[1] = max(self.grasp.offset[1], _table_clearance(env, plan, side))
+        hand = env.embodiment.hand
+        # A hand's own side grasp round a vessel's body (a handle's grasp sets a standoff).
+        body = plan.grasp.side and plan.grasp.standoff is None
+        if body:
+            self.grasp.offset += np.asarray(hand.vessel_shift)
         if plan.grasp.standoff is not None:  # from where the hand clears the table
             self.grasp.offset[2] += stand_off(self.grasp, plan.grasp.standoff)
         self._held_rot = self.grasp.grasp_rot.copy()
@@ -54,6 +61,7 @@ class PourExpert:
         adapter = self.grasp.adapter
         opened, closed = adapter.pose("open"), adapter.pose(plan.grasp.synergy)
         squeezed = np.clip(opened + plan.squeeze * (closed - opened), ranges[:, 0], ranges[:, 1])
+        self._grasp_turn = plan.grasp_turn + (hand.vessel_turn if body else 0.0)
         adapter.add_pose(SQUEEZE, _overridden(squeezed, actuators, plan.overrides))
         if plan.open_overrides:
             adapter.add_pose("open", _overridden(opened, actuators, plan.open_overrides))
@@ -77,7 +85,7 @@ class PourExpert:
         risen = carry & (grasp.pos[:, 2] > grasp.lift_from[:, 2] + self.plan.clearance)
         # Turn gradually: the hanging vessel must not be flung out of the fingers.
         step = self.plan.turn_rate * self._dt
-        start = self.plan.grasp_turn
+        start = self._grasp_turn
         self._angle = np.where(risen, np.minimum(np.maximum(self._angle, start) + step,
                                                  self.plan.tilt), start)
         axis = self._held_rot @ np.asarray(self.plan.about)
