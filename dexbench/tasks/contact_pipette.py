@@ -5,14 +5,12 @@ from __future__ import annotations
 from typing import ClassVar
 
 import mujoco
-import torch
 
 from dexbench.assets import lab
 from dexbench.assets.objects import ObjectInfo
-from dexbench.envs.task_api import SceneView
 from dexbench.tasks.catalog import register
-from dexbench.tasks.contact_rich import pinch_and_insert
-from dexbench.tasks.templates import Placement, TabletopTask
+from dexbench.tasks.contact_rich import SlenderInsertTask, pinch_and_insert
+from dexbench.tasks.templates import Placement
 
 PIPETTE_RAISED = 0.2  # m: high enough for the pipette, turned tip-down, to clear the flask
 
@@ -25,7 +23,7 @@ PIPETTE_PLAN = pinch_and_insert("pipette", "flask", ("bulb_end", (0.04, 0.0, 0.0
 
 
 @register
-class InsertPipette(TabletopTask):
+class InsertPipette(SlenderInsertTask):
     name = "InsertPipette"
     category = "contact_rich"
     instruction = "Put the pipette's tip into the neck of the flask."
@@ -43,20 +41,8 @@ class InsertPipette(TabletopTask):
     }
     centred, below = 0.02, 0.01
     expert = PIPETTE_PLAN
+    slender, holder, ends = "pipette", "flask", ("tip",)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"pipette": lab.add_pipette(spec, "pipette"),
                 "flask": lab.add_flask(spec, "flask")}
-
-    def _errors(self, view: SceneView) -> tuple[torch.Tensor, torch.Tensor]:
-        """(N,) horizontal offset of the tip from the opening, and its depth below the rim."""
-        rel = self.point(view, "pipette", "tip") - self.point(view, "flask", "entrance")
-        return rel[:, :2].norm(dim=1), -rel[:, 2]
-
-    def success(self, view: SceneView) -> torch.Tensor:
-        off, depth = self._errors(view)
-        return (off <= self.centred) & (depth >= self.below)
-
-    def progress(self, view: SceneView) -> torch.Tensor:
-        off, depth = self._errors(view)
-        return 1.0 - off / 0.5 - (self.below - depth).clamp(min=0.0) / 0.2

@@ -110,8 +110,34 @@ def pinch_and_insert(obj: str, hole: str, point: tuple, raised: float) -> Sequen
 PEN_PLAN = pinch_and_insert("pen", "holder", ("tail", (0.05, 0.0, 0.0)), PEN_RAISED)
 
 
+class SlenderInsertTask(TabletopTask):
+    """A slender object put end first into an opening: success while one of its `ends`
+    is centred within `centred` (m, horizontally) of the `holder`'s "entrance" point and
+    at least `below` (m) under it."""
+
+    slender: ClassVar[str]
+    holder: ClassVar[str]
+    ends: ClassVar[tuple[str, ...]]
+    centred: ClassVar[float]
+    below: ClassVar[float]
+
+    def _errors(self, view: SceneView) -> tuple[torch.Tensor, torch.Tensor]:
+        """(N, E) horizontal offset from the opening and depth below the rim of each end."""
+        ends = torch.stack([self.point(view, self.slender, end) for end in self.ends], dim=1)
+        rel = ends - self.point(view, self.holder, "entrance")[:, None]
+        return rel[..., :2].norm(dim=-1), -rel[..., 2]
+
+    def success(self, view: SceneView) -> torch.Tensor:
+        off, depth = self._errors(view)
+        return ((off <= self.centred) & (depth >= self.below)).any(dim=1)
+
+    def progress(self, view: SceneView) -> torch.Tensor:
+        off, depth = self._errors(view)
+        return (1.0 - off / 0.5 - (self.below - depth).clamp(min=0.0) / 0.2).max(dim=1).values
+
+
 @register
-class InsertPen(TabletopTask):
+class InsertPen(SlenderInsertTask):
     name = "InsertPen"
     category = "contact_rich"
     instruction = "Put the pen into the pen holder."
@@ -127,20 +153,7 @@ class InsertPen(TabletopTask):
     }
     centred, below = 0.038, 0.03
     expert = PEN_PLAN
+    slender, holder, ends = "pen", "holder", ("tip", "tail")
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"pen": office.add_pen(spec, "pen"), "holder": office.add_pen_holder(spec, "holder")}
-
-    def _errors(self, view: SceneView) -> tuple[torch.Tensor, torch.Tensor]:
-        """(N, 2) horizontal offset from the opening and depth below the rim of each end."""
-        ends = torch.stack([self.point(view, "pen", end) for end in ("tip", "tail")], dim=1)
-        rel = ends - self.point(view, "holder", "entrance")[:, None]
-        return rel[..., :2].norm(dim=-1), -rel[..., 2]
-
-    def success(self, view: SceneView) -> torch.Tensor:
-        off, depth = self._errors(view)
-        return ((off <= self.centred) & (depth >= self.below)).any(dim=1)
-
-    def progress(self, view: SceneView) -> torch.Tensor:
-        off, depth = self._errors(view)
-        return (1.0 - off / 0.5 - (self.below - depth).clamp(min=0.0) / 0.2).max(dim=1).values

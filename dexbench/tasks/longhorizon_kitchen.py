@@ -130,6 +130,23 @@ def _fraction_at_least(joint: str, value: float) -> Callable[[DexEnv, object], n
     return done
 
 
+DOOR_PUSH = ("handle", (-0.03, 0.0, 0.10))  # a door's outer face, 6 cm below its top
+DIAL_CLEAR = 0.15  # m the hand rises from the shut door before going over to the dial
+
+
+def shut_and_dial(appliance: str, push_speed: float = 0.1, hold: float = 0.0,
+                  rise_speed: float | None = None) -> tuple[Step, ...]:
+    """An appliance's door pushed shut by its outer face (and held `hold` s: a slammed
+    door bounces), the hand risen `DIAL_CLEAR` over its top edge, its front dial's bar
+    pushed round (as RotateKnob's)."""
+    door = f"{appliance}/door"
+    return (Step(TurnPlan(appliance, DOOR_PUSH, hinge=door, direction=-1.0,
+                          push_speed=push_speed),
+                 until=joint_below(door, DOOR_SHUT / 2), hold=hold),
+            Step(ReachPlan(lambda _, start: start + [0.0, 0.0, DIAL_CLEAR], speed=rise_speed)),
+            Step(TurnPlan(appliance, "dial0", hinge=f"{appliance}/dial0")))
+
+
 # MicrowaveFood's geometry, in the fridge's base frame (front face at x = 0.15, the door
 # hinged at y = -0.17, the microwave's side): `FRIDGE_CLEAR` is in front of the free
 # edge of the door swung open 88 deg (0.34 m wide) with the hand and food clear of it,
@@ -218,11 +235,7 @@ MICROWAVE_PLAN = SequencePlan((
     Step(ReachPlan(_moved("microwave", (0.22, 0.0, 0.02)), speed=TRAVEL)),
     Step(TurnPlan("fridge", "handle", hinge="fridge/door", direction=-1.0, push_speed=0.3),
          until=joint_below("fridge/door", DOOR_SHUT / 2)),
-    Step(TurnPlan("microwave", ("handle", (-0.03, 0.0, 0.10)), hinge="microwave/door",
-                  direction=-1.0, push_speed=0.3),
-         until=joint_below("microwave/door", DOOR_SHUT / 2)),
-    Step(ReachPlan(lambda _, start: start + [0.0, 0.0, 0.15], speed=TRAVEL)),
-    Step(TurnPlan("microwave", "dial0", hinge="microwave/dial0"))))
+    *shut_and_dial("microwave", push_speed=0.3, rise_speed=TRAVEL)))
 
 
 @register
@@ -369,9 +382,10 @@ QUICK = {"arrive": 0.02, "settle": 0.5, "carry_speed": 0.3}
 # The can as `body_pour` holds it, but from its -x-y side (the fingers pointing away from
 # the bottle, which they would knock over), tipped at 1.5 rad/s and all fingers closed:
 # no rim is kept clear here, and the straight index finger would dip into the pot.
+_CAN = body_pour("can", "lip")
 CAN_POUR = dataclasses.replace(
-    body_pour("can", "lip"), turn_rate=1.5, overrides=(),
-    grasp=dataclasses.replace(body_pour("can", "lip").grasp, yaw_offset=-math.pi / 4))
+    _CAN, turn_rate=1.5, overrides=(),
+    grasp=dataclasses.replace(_CAN.grasp, yaw_offset=-math.pi / 4))
 # The 18 cm, 0.2 kg bottle from its -x side (the forearm clear of the pot), at 7 cm
 # (below its centre of mass), thumb closed round it (`power`): with the thumb open
 # (`hook`) it rolls out of the fingers as the hand tips.
@@ -505,10 +519,8 @@ SEASON_ABOVE = 0.08  # m over the salmon's centre: the tipped jar clears the tab
 # oven: clear of the salmon's grasp, its way to the oven, the door's sweep and the
 # other jar.
 SALT_AWAY, PEPPER_AWAY = (-0.25, 0.0, 0.0), (0.12, -0.05, 0.0)
-DOOR_PUSH = ("handle", (-0.03, 0.0, 0.10))  # the door's outer face, 6 cm below its top
 SET_IN = 0.10  # m behind the oven's front the salmon's centre is let go: all of it in
 DOOR_HOLD = 0.5  # s the pushed door is held shut before the hand lets it be
-DIAL_CLEAR = 0.15  # m the hand rises from the shut door before going over to the dial
 
 
 def _salmon(env: DexEnv) -> np.ndarray:
@@ -543,10 +555,7 @@ OVEN_PLAN = SequencePlan((
     pour_step("pepper", "lip", _salmon, 1, SEASON_ABOVE, park=PEPPER_AWAY),
     Step(GraspPlan("salmon", target=through_front("oven", "cavity", "salmon", up=0.08),
                    release=True, let_go=_deep_inside("oven", "cavity", "salmon", SET_IN))),
-    Step(TurnPlan("oven", DOOR_PUSH, hinge="oven/door", direction=-1.0),
-         until=joint_below("oven/door", DOOR_SHUT / 2), hold=DOOR_HOLD),
-    Step(ReachPlan(lambda _, start: start + [0.0, 0.0, DIAL_CLEAR])),
-    Step(TurnPlan("oven", "dial0", hinge="oven/dial0"))))
+    *shut_and_dial("oven", hold=DOOR_HOLD)))
 
 
 @register
