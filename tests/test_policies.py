@@ -61,23 +61,31 @@ def trained(demos, tmp_path_factory) -> dict[str, pathlib.Path]:
             for kind in ("dp", "dp3")}
 
 
-def _rollout(kind: str, checkpoint: pathlib.Path, steps: int) -> list[torch.Tensor]:
+def _rollout(kind: str, checkpoint: pathlib.Path, steps: int,
+             lazy: bool = False) -> list[torch.Tensor]:
+    """Actions of `steps` control steps; `lazy`: camera groups rendered only for the envs
+    whose next frame the policy says it reads."""
     module = policy_module(kind)
     spec = module.spec(checkpoint, {})
     env = make_env(spec.task, spec.embodiment, num_envs=3, seed=11, obs=spec.obs, nthread=1,
-                   **(CAMERA if kind == "dp3" else {}))
+                   history=0 if lazy else None, **(CAMERA if kind == "dp3" else {}))
     policy = module.build(checkpoint, env, "cpu", {})
     obs = env.reset()
     policy.reset(torch.arange(3))
-    actions = []
+    actions, skipped = [], 0
     for t in range(steps):
         action = policy.act(obs)
         assert action.shape == (3, env.action_dim) and torch.isfinite(action).all()
         actions.append(action)
-        obs, *_ = env.step(action)
+        observe = policy.reads_next() if lazy else None
+        obs, *_ = env.step(action, observe=observe)
+        if observe is not None:
+            skipped += int((~observe).sum())
+            assert (obs["pointcloud"][~observe] == 0).all()  # not rendered
         if t == 4:  # env 1 starts over: only its history and queue restart
             obs = env.reset([1])
             policy.reset(torch.tensor([1]))
+    assert skipped > 0 or not lazy
     return actions
 
 
@@ -101,6 +109,12 @@ def test_train_save_reload_and_act(trained, kind):
     # actions stay inside the range the demonstrations span (normalizer + clipped samples)
     low, high = (payload["normalizer"][k]["action"] for k in ("low", "high"))
     assert all(((a >= low - 1e-4) & (a <= high + 1e-4)).all() for a in first)
+
+
+def test_dp3_rendering_only_the_frames_it_reads_gives_the_same_actions(trained):
+    eager, lazy = (_rollout("dp3", trained["dp3"], 12, lazy=flag) for flag in (False, True))
+    for a, b in zip(eager, lazy, strict=True):
+        torch.testing.assert_close(a, b, rtol=0, atol=0)
 
 
 def test_dp3_replays_point_clouds_once_beside_the_dataset(trained, demos):
@@ -160,6 +174,27 @@ def test_chunked_actor_plans_only_for_envs_whose_queue_ran_out():
     assert calls == [2, 2, 1]
     assert torch.equal(actor.window.history["x"][0, :, 0], torch.tensor([12.0, 12.0]))  # refilled
     assert torch.equal(actor.window.history["x"][1, :, 0], torch.tensor([11.0, 12.0]))
+
+
+def test_chunked_actor_reads_only_the_frames_its_next_plan_sees():
+    """n_obs_steps=2, n_action_steps=4: after the plan at call 0, calls 3 and 4 feed the
+    window of the plan at call 4; calls 1 and 2 are pushed out unread."""
+    actor = ChunkedActor(num_envs=1, n_obs_steps=2, n_action_steps=4, action_dim=1)
+    seen = []
+
+    def plan(windows):
+        seen.append(windows["x"][0, :, 0].tolist())
+        return torch.zeros(1, 4, 1)
+
+    reads = []
+    for t in range(9):
+        read = actor.reads_next()[0].item() if t else True  # call 0: the reset's frame
+        reads.append(read)
+        actor.act({"x": torch.tensor([[float(t) if read else -1.0]])}, plan)
+    assert reads == [True, False, False, True, True, False, False, True, True]
+    assert seen == [[0.0, 0.0], [3.0, 4.0], [7.0, 8.0]]  # never an unread frame
+    wide = ChunkedActor(num_envs=3, n_obs_steps=5, n_action_steps=2, action_dim=1)
+    assert wide.reads_next().all()  # a window longer than a chunk reads every frame
 
 
 def test_windows_repeat_the_first_observation_and_the_last_action():

@@ -49,10 +49,13 @@ class CameraObservations:
         if "pointcloud" in groups and not self.cloud_cameras:
             raise ValueError(f"pointcloud needs one of the cameras {THIRD_PERSON}")
 
-    def compute(self) -> dict[str, torch.Tensor]:
+    def compute(self, envs: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+        """Every env's camera groups, or only those of `envs` (indices): the other envs'
+        rows are zero, for a reader that will not look at them this step."""
         want_depth = "depth" in self.groups or "pointcloud" in self.groups
         frames = self.renderer.render(list(self.cameras), rgb="rgb" in self.groups,
-                                       depth=want_depth)
+                                       depth=want_depth,
+                                       envs=None if envs is None else envs.cpu().numpy())
         out: dict[str, torch.Tensor] = {}
         for cam, f in frames.items():
             if "rgb" in self.groups:
@@ -62,10 +65,22 @@ class CameraObservations:
         if "pointcloud" in self.groups:
             home = frames[self.cloud_cameras[0]].depth.device
             at = self.cloud_device or home
-            clouds = [depth_to_world(f.depth.to(at), f.fovy.to(at), f.cam_pos.to(at),
-                                     f.cam_mat.to(at))
-                      for f in (frames[c] for c in self.cloud_cameras)]
-            points = torch.cat(clouds, dim=1)
-            cloud = sample_cloud(points, crop_mask(points, CROP_LO, CROP_HI), self.num_points)
-            out["pointcloud"] = cloud.to(device=home, dtype=torch.float32)
+            if envs is None:
+                out["pointcloud"] = self._clouds(frames, slice(None), at).to(home)
+            else:
+                n = frames[self.cloud_cameras[0]].depth.shape[0]
+                cloud = torch.zeros(n, self.num_points, 3, device=home)
+                if len(envs):
+                    rows = envs.to(home)
+                    cloud.index_copy_(0, rows, self._clouds(frames, rows, at).to(home))
+                out["pointcloud"] = cloud
         return out
+
+    def _clouds(self, frames, rows, at: torch.device) -> torch.Tensor:
+        """(len(rows), num_points, 3) float32 fused clouds of those envs, computed on `at`."""
+        clouds = [depth_to_world(f.depth[rows].to(at), f.fovy[rows].to(at),
+                                 f.cam_pos[rows].to(at), f.cam_mat[rows].to(at))
+                  for f in (frames[c] for c in self.cloud_cameras)]
+        points = torch.cat(clouds, dim=1)
+        cloud = sample_cloud(points, crop_mask(points, CROP_LO, CROP_HI), self.num_points)
+        return cloud.to(torch.float32)

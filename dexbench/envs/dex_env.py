@@ -297,10 +297,20 @@ class DexEnv:
                 "nothing was stepped")
         return torch.clamp(a.double(), self.action_low, self.action_high)
 
-    def step(self, actions) -> tuple[Obs, torch.Tensor, torch.Tensor, torch.Tensor, dict]:
-        """Apply one control step; return (obs, reward, terminated, truncated, info)."""
+    def step(self, actions, observe: torch.Tensor | None = None
+             ) -> tuple[Obs, torch.Tensor, torch.Tensor, torch.Tensor, dict]:
+        """Apply one control step; return (obs, reward, terminated, truncated, info).
+
+        `observe` (bool, (num_envs,)): the envs whose camera groups are rendered this step;
+        the others' rows are zero. A chunking policy reads images only on the few steps
+        before it plans (`reads_next`), and rendering is most of an image policy's
+        evaluation time. Rendering changes no state, so the episodes are the same.
+        """
         if not self._was_reset:
             raise RuntimeError("call reset() before the first step()")
+        if observe is not None and self.history and self.cameras is not None:
+            raise ValueError("observe= skips frames, which an env-side history would stack; "
+                             "build the env with history=0 to use it")
         a = self._validate(actions)
         self._f["ctrl"][:] = a
         self.last_action = a.float()
@@ -318,9 +328,10 @@ class DexEnv:
             done = (terminated | truncated).nonzero().flatten()
             if len(done) > 0:
                 return self.reset(done), reward, terminated, truncated, info
-        return self._observe(), reward, terminated, truncated, info
+        return self._observe(observe=observe), reward, terminated, truncated, info
 
-    def _observe(self, reset_ids: torch.Tensor | None = None) -> Obs:
+    def _observe(self, reset_ids: torch.Tensor | None = None,
+                 observe: torch.Tensor | None = None) -> Obs:
         out: Obs = {}
         noise = self.variation.physical.obs_noise if self.variation.physical.enabled else 0.0
         for group in self.groups:
@@ -331,7 +342,8 @@ class DexEnv:
             if value is not None:
                 out[group] = value
         if self.cameras is not None:
-            out.update(self.cameras.compute())
+            envs = None if observe is None else torch.as_tensor(observe).nonzero().flatten()
+            out.update(self.cameras.compute(envs))
         if self.history:
             out = {k: self._stack(k, v, reset_ids) for k, v in out.items()}
         return out

@@ -48,9 +48,11 @@ def run_episodes(env: DexEnv, policy: Policy, episodes: Sequence[int], seed: int
             videos.capture([int(s) for s in take])
         return obs
 
+    reads_next = getattr(policy, "reads_next", lambda: None)
     obs = begin(np.arange(n))
     while (running >= 0).any():
-        obs, _, terminated, truncated, info = env.step(policy.act(obs))
+        action = policy.act(obs)
+        obs, _, terminated, truncated, info = env.step(action, observe=reads_next())
         if videos is not None:
             videos.capture()
         warnings = info["sim_warnings"].cpu().numpy()  # since each env's reset

@@ -200,6 +200,8 @@ def build_env(spec: EvalSpec, plan: TaskPlan, num_envs: int) -> DexEnv:
               "num_envs": num_envs}
     if plan.spec.cameras is not None:
         kwargs["cameras"] = list(plan.spec.cameras)
+    if plan.spec.history is not None:
+        kwargs["history"] = plan.spec.history
     env = make_env(**kwargs)
     if spec.horizon is not None:
         env.episode_steps = spec.horizon

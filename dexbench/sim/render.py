@@ -52,7 +52,10 @@ class CpuRenderer:
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
-    def render(self, cameras: list[str], rgb: bool, depth: bool) -> dict[str, CameraFrames]:
+    def render(self, cameras: list[str], rgb: bool, depth: bool,
+               envs: np.ndarray | None = None) -> dict[str, CameraFrames]:
+        """Every world's frames, or only those of `envs` (indices): the others stay zero
+        (camera poses included), and rendering costs in proportion to the worlds drawn."""
         n, model = self._backend.num_envs, self._model
         h, w = self.height, self.width
         ids = [model.camera(c).id for c in cameras]
@@ -62,7 +65,8 @@ class CpuRenderer:
         mat = np.zeros((len(cameras), n, 3, 3))
         fovy = np.zeros((len(cameras), n))
         r = self._renderer
-        for env in range(n):
+        for env in (range(n) if envs is None else envs):
+            env = int(env)
             self._backend.batch.get_data(env, self._data)
             model = self._backend.world_model(env, self._world_model)
             for k, cam in enumerate(ids):

@@ -108,7 +108,11 @@ class WarpRenderer:
                 setattr(self._m, name, wp.array(np.ascontiguousarray(values),
                                                 dtype=old.dtype, device=self.device))
 
-    def render(self, cameras: list[str], rgb: bool, depth: bool) -> dict[str, CameraFrames]:
+    def render(self, cameras: list[str], rgb: bool, depth: bool,
+               envs: np.ndarray | None = None) -> dict[str, CameraFrames]:
+        """Every world's frames; one batched ray-tracing pass draws all worlds, so `envs`
+        (the worlds whose frames are read) saves nothing here and is accepted for the
+        renderers' common interface."""
         wp, mjw = self._wp, self._mjw
         rc, rgb_adr, depth_adr = self._context(tuple(cameras), rgb, depth)
         with wp.ScopedDevice(self.device):

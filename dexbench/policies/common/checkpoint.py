@@ -73,8 +73,9 @@ def load_checkpoint(path: str | pathlib.Path, kind: str) -> dict[str, Any]:
 
 
 def spec_of(payload: dict[str, Any]) -> PolicySpec:
-    """What the env must look like for this checkpoint."""
+    """What the env must look like for this checkpoint: no env-side history, since the
+    chunking policy keeps its own window of frames (`ChunkedActor`)."""
     obs = payload["obs"]
     return PolicySpec(obs=obs if isinstance(obs, str) else tuple(obs), task=payload["task"],
                       embodiment=payload["embodiment"],
-                      action_layout=tuple(payload["action_layout"]))
+                      action_layout=tuple(payload["action_layout"]), history=0)

@@ -61,6 +61,11 @@ class ChunkedActor:
         self.window.reset(ids)
         self.cursor[ids] = self.n_action_steps
 
+    def reads_next(self) -> torch.Tensor:
+        """(num_envs,) bool: the envs whose next frame will still be in the window when
+        they next plan; the other envs' next frames are pushed out unread."""
+        return self.cursor >= self.n_action_steps - self.n_obs_steps + 1
+
     def act(self, obs: dict[str, torch.Tensor], plan: Planner) -> torch.Tensor:
         """One action per env (num_envs, A); `plan` maps the windows (n, To, ...) of the
         envs that need a new chunk to chunks (n, horizon >= n_action_steps, A)."""

@@ -20,7 +20,9 @@ class PolicySpec:
     `obs` is the observation preset (or group list) to build the env with; `task` and
     `embodiment` are those it was trained on (None: any); `action_layout` the ordered
     actuator names its actions follow (None: any), checked against the env's; `cameras`
-    the cameras its image groups come from (None: those the env config names).
+    the cameras its image groups come from (None: those the env config names); `history`
+    the env-side frame stack it wants (None: the preset's; 0 for a policy that keeps its
+    own window, so that the env may skip frames it will not read).
     """
 
     obs: str | tuple[str, ...]
@@ -28,6 +30,7 @@ class PolicySpec:
     embodiment: str | None = None
     action_layout: tuple[str, ...] | None = None
     cameras: tuple[str, ...] | None = None
+    history: int | None = None
 
 
 class Policy(Protocol):
@@ -39,7 +42,12 @@ class Policy(Protocol):
         """Forget history and queued actions of those envs (called after they reset)."""
 
     def act(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
-        """Absolute joint targets (num_envs, action_dim) for the current observations."""
+        """Absolute joint targets (num_envs, action_dim) for the current observations.
+
+        A policy may also define `reads_next() -> Tensor | None`, called after `act`: the
+        envs whose next observation it will read (bool, (num_envs,)); the evaluator then
+        renders camera groups only for those (`DexEnv.step(observe=)`).
+        """
 
 
 class ActionLayoutError(ValueError):

@@ -55,6 +55,11 @@ class DiffusionChunkPolicy:
     def reset(self, env_ids: torch.Tensor | None = None) -> None:
         self.actor.reset(env_ids)
 
+    def reads_next(self) -> torch.Tensor | None:
+        """The envs whose next observation this policy will read (None: all, as with an
+        env-side history, whose stacks need every frame)."""
+        return None if self.stacked else self.actor.reads_next()
+
     def act(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
         missing = [g for g in self.groups if g not in obs]
         if missing:
