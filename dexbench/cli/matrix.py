@@ -185,7 +185,7 @@ def run_feasibility(base: dict, task: str, reference: str, probes: int,
     paths = feasibility.record_palm_paths(prepared.spec, prepared.plans[0], probes)
     out = []
     for embodiment, folder in targets:
-        measurement = feasibility.measure(embodiment, paths)
+        measurement = feasibility.measure(embodiment, paths, TASKS[task].workspace)
         pathlib.Path(folder).mkdir(parents=True, exist_ok=True)
         write_text(pathlib.Path(folder) / matrix.FEASIBILITY_FILE,
                    json.dumps(measurement, indent=2) + "\n")

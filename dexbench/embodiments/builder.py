@@ -24,8 +24,12 @@ from dexbench.embodiments.ik import solve_site_pose
 
 MOUNTS = ("floating", "fr3", "ur10e", "xarm7")
 TABLE_TOP_Z = 0.6
+TABLE_HALF_SIZE = (0.6, 0.75)  # table top spans x in [-0.6, 0.6], y in [-0.75, 0.75]
 HOME_PALM_X = -0.25
 HOME_PALM_Z = 0.8
+# Where a task's hands work (world x, y, height above the table top) unless it declares
+# otherwise (`Task.workspace`): the table centre. Arms and their homes are placed from it.
+DEFAULT_WORKSPACE = (0.0, 0.0, 0.0)
 BIMANUAL_Y = {"right": -0.3, "left": 0.3}
 # Home orientation of the hand frame: fingers along +x, palm normal down (-z).
 HOME_PALM_ROT = np.diag([1.0, -1.0, -1.0])
@@ -231,11 +235,17 @@ def _add_arm_side(spec: mujoco.MjSpec, arm: str, hand: str, side: str, palm_pos,
     standoff = geo.extent_behind(tool_axis)
     flange_x = palm_pos[0] - standoff * (HOME_PALM_ROT @ tool_axis)[0]
     base_x = flange_x - info.flange_reach
-    base_pos = [base_x, palm_pos[1], TABLE_TOP_Z]
+    # Level with the table top, raised with the home for a raised workspace; the pedestal
+    # stands on the floor, or on the table where the workspace brings the base over it.
+    base_z = TABLE_TOP_Z + (palm_pos[2] - HOME_PALM_Z)
+    base_pos = [base_x, palm_pos[1], base_z]
     base = spec.worldbody.add_body(name=f"{side}/base", pos=base_pos)
-    base.add_geom(name=f"{side}/pedestal", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-                  size=[0.09, TABLE_TOP_Z / 2, 0], pos=[0, 0, -TABLE_TOP_Z / 2],
-                  rgba=[0.25, 0.25, 0.28, 1])
+    on_table = abs(base_x) < TABLE_HALF_SIZE[0] and abs(palm_pos[1]) < TABLE_HALF_SIZE[1]
+    pedestal = base_z - (TABLE_TOP_Z if on_table else 0.0)
+    if pedestal > 0.0:
+        base.add_geom(name=f"{side}/pedestal", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                      size=[0.09, pedestal / 2, 0], pos=[0, 0, -pedestal / 2],
+                      rgba=[0.25, 0.25, 0.28, 1])
     arm_spec = robot_spec(info.collection, info.entry)
     for key in list(arm_spec.keys):
         arm_spec.delete(key)
@@ -259,9 +269,18 @@ def _add_arm_side(spec: mujoco.MjSpec, arm: str, hand: str, side: str, palm_pos,
                       tuple(palm_pos), home_q, root)
 
 
-def _palm_home(name: EmbodimentName, side: str) -> tuple[float, float, float]:
+def _palm_home(name: EmbodimentName, side: str,
+               workspace: tuple[float, float, float] = DEFAULT_WORKSPACE
+               ) -> tuple[float, float, float]:
+    """The hand frame's home position. An arm keeps the same pose relative to the task's
+    workspace on every task (its home and base move with it), so what it reaches on the
+    table centre it reaches wherever a task works, and its home hand is as far above a
+    raised workspace as above the table; the floating wrist ignores it."""
     y = BIMANUAL_Y[side] if name.bimanual else 0.0
-    return (HOME_PALM_X, y, HOME_PALM_Z)
+    if name.mount == "floating":
+        return (HOME_PALM_X, y, HOME_PALM_Z)
+    dx, dy, dz = (w - d for w, d in zip(workspace, DEFAULT_WORKSPACE, strict=True))
+    return (HOME_PALM_X + dx, y + dy, HOME_PALM_Z + dz)
 
 
 @functools.cache
@@ -269,7 +288,8 @@ def arm_home(arm: str, hand: str, side: str) -> tuple[tuple[str, float], ...]:
     """Arm joint angles that put the hand frame at its home pose (palm down, fingers +x).
 
     Solved once per (arm, hand, side) by IK on a robot-only model; the relative geometry
-    is the same for every lateral offset, so y = 0 serves the bimanual sides too.
+    is the same for every offset, so y = 0 serves the bimanual sides and the default
+    workspace every task's (`_palm_home`).
     """
     spec = new_spec()
     palm = (HOME_PALM_X, 0.0, HOME_PALM_Z)
@@ -286,14 +306,16 @@ def arm_home(arm: str, hand: str, side: str) -> tuple[tuple[str, float], ...]:
     return tuple((j, float(v)) for j, v in zip(layout.mount_joints, q, strict=True))
 
 
-def add_embodiment(spec: mujoco.MjSpec, embodiment: str) -> EmbodimentPlan:
-    """Add an embodiment to `spec`; return its layout and per-actuator pose targets."""
+def add_embodiment(spec: mujoco.MjSpec, embodiment: str,
+                   workspace: tuple[float, float, float] = DEFAULT_WORKSPACE) -> EmbodimentPlan:
+    """Add an embodiment to `spec`, its arms placed for a task working around `workspace`
+    (`DEFAULT_WORKSPACE`, `_palm_home`); return its layout and per-actuator pose targets."""
     name = parse_embodiment(embodiment)
     sides: dict[str, SideLayout] = {}
     targets: dict[str, dict[str, float]] = {s: {} for s in SYNERGIES}
     hand_qpos: dict[str, float] = {}
     for side in name.sides:
-        palm = _palm_home(name, side)
+        palm = _palm_home(name, side, workspace)
         if name.mount == "floating":
             layout = _add_floating_side(spec, name.hand, side, palm)
         else:

@@ -16,9 +16,8 @@ from dexbench.assets.backgrounds import DEFAULT as BACKDROP_DEFAULT
 from dexbench.assets.backgrounds import add_background_library
 from dexbench.assets.materials import add_material_library
 from dexbench.assets.objects import new_spec
-from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.embodiments.builder import TABLE_HALF_SIZE, TABLE_TOP_Z
 
-TABLE_HALF_SIZE = (0.6, 0.75)  # table top spans x in [-0.6, 0.6], y in [-0.75, 0.75]
 TABLE_THICKNESS = 0.04
 BACKDROP_HALF_SIZE = 3.5  # walls at x, y = +-3.5 m
 BACKDROP_HEIGHT = 4.0  # ceiling height

@@ -110,7 +110,7 @@ def compose_scene(task: Task, embodiment: str, options: PhysicsOptions,
     background variation may show)."""
     check_pair(task, embodiment)
     spec = build_arena(options, backgrounds)
-    plan = add_embodiment(spec, embodiment)
+    plan = add_embodiment(spec, embodiment, task.workspace)
     task.build(spec)
     spec.nuserdata = task.memory_size
     sides = plan.sides.values()

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from dexbench.assets.objects import Zone
+from dexbench.embodiments.builder import DEFAULT_WORKSPACE
 from dexbench.envs.rotations import quat_apply
 
 ZONE_CONTACTS = 16  # contacts a no-touch sensor reports per hand (the deepest first)
@@ -226,6 +227,9 @@ class Task(ABC):
     deviations: ClassVar[tuple[str, ...]] = ()  # where success differs from the paper's
     tracked_bodies: ClassVar[tuple[str, ...]] = ()  # bodies whose reset pose is kept
     memory_size: ClassVar[int] = 0  # floats of per-env memory (`SceneView.memory`)
+    # Where the hands work (world x, y; height above the table top): arm mounts are
+    # placed relative to it (`builder._palm_home`), the floating wrist is not.
+    workspace: ClassVar[tuple[float, float, float]] = DEFAULT_WORKSPACE
 
     @classmethod
     def success_doc(cls) -> str:

@@ -11,8 +11,9 @@ enforced), warm-started along the trajectory from the arm's home pose as the ada
 does, and retried from home when it misses. Each pose gets two residuals: the full
 pose's (position m, orientation rad), and the reach: the position residual with the
 orientation left free (solved from the full pose's solution, then from home). Reach,
-joint limits and the bimanual arms' placement count; collisions of arm links do not (the
-test is kinematic).
+joint limits and the bimanual arms' placement count (each arm placed for the task's
+`workspace`, as its scene places it); collisions of arm links do not (the test is
+kinematic).
 
 Only the probe episodes the floating expert solves count: a failed episode's path
 (retries, a dropped object chased) is not what the plan needs. The verdict (`verdict`)
@@ -43,7 +44,7 @@ import mujoco
 import numpy as np
 
 from dexbench.assets.objects import new_spec
-from dexbench.embodiments.builder import add_embodiment, parse_embodiment
+from dexbench.embodiments.builder import DEFAULT_WORKSPACE, add_embodiment, parse_embodiment
 from dexbench.embodiments.ik import solve_site_pose
 from dexbench.envs.dex_env import DexEnv
 from dexbench.eval.plan import TaskPlan
@@ -146,9 +147,10 @@ class _Robot:
 
 
 @functools.cache
-def _robot(embodiment: str) -> _Robot:
+def _robot(embodiment: str, workspace: tuple[float, float, float]) -> _Robot:
+    """Placed for the task's workspace, as the task's scene places it."""
     spec = new_spec()
-    plan = add_embodiment(spec, embodiment)
+    plan = add_embodiment(spec, embodiment, workspace)
     model = spec.compile()
     data = mujoco.MjData(model)
     for layout in plan.sides.values():
@@ -167,12 +169,13 @@ def _residual(model: mujoco.MjModel, data: mujoco.MjData, site: int, pos: np.nda
     return float(np.linalg.norm(pos - data.site_xpos[site])), float(np.arccos(cos))
 
 
-def ik_residuals(embodiment: str, positions: np.ndarray, rotations: np.ndarray
-                 ) -> np.ndarray:
-    """(T, sides, 3) residuals of `embodiment`'s mounts reaching palm poses `positions`
-    (T, sides, 3) and `rotations` (T, sides, 3, 3), solved along them from home: the
-    full pose's position (m) and orientation (rad), and the reach (m, orientation free)."""
-    robot = _robot(embodiment)
+def ik_residuals(embodiment: str, positions: np.ndarray, rotations: np.ndarray,
+                 workspace: tuple[float, float, float] = DEFAULT_WORKSPACE) -> np.ndarray:
+    """(T, sides, 3) residuals of `embodiment`'s mounts (placed for a task's `workspace`)
+    reaching palm poses `positions` (T, sides, 3) and `rotations` (T, sides, 3, 3), solved
+    along them from home: the full pose's position (m) and orientation (rad), and the
+    reach (m, orientation free)."""
+    robot = _robot(embodiment, tuple(workspace))
     model = robot.model
     data = mujoco.MjData(model)
     out = np.zeros((len(positions), len(robot.sides), 3))
@@ -211,13 +214,16 @@ def ik_residuals(embodiment: str, positions: np.ndarray, rotations: np.ndarray
     return out
 
 
-def measure(embodiment: str, paths: list[PalmPath]) -> dict:
-    """`embodiment`'s reach of the reference palm paths, as `feasibility.json` stores it:
-    per probe episode whether the reference solved it, and the `QUANTILE` percentile and
-    maximum of each residual (over both hands for a bimanual embodiment)."""
+def measure(embodiment: str, paths: list[PalmPath],
+            workspace: tuple[float, float, float] = DEFAULT_WORKSPACE) -> dict:
+    """`embodiment`'s reach of the reference palm paths on a task working around
+    `workspace` (`Task.workspace`), as `feasibility.json` stores it: per probe episode
+    whether the reference solved it, and the `QUANTILE` percentile and maximum of each
+    residual (over both hands for a bimanual embodiment)."""
     episodes = []
     for path in paths:
-        res = ik_residuals(embodiment, path.pos[::STRIDE], path.rot[::STRIDE]).reshape(-1, 3)
+        res = ik_residuals(embodiment, path.pos[::STRIDE], path.rot[::STRIDE],
+                           workspace).reshape(-1, 3)
         q, top = np.percentile(res, QUANTILE, axis=0), res.max(axis=0)
         episodes.append({"reference_success": path.success, "poses": len(res),
                          **{f"{name}_q": round(float(v), 5)

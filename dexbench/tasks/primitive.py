@@ -210,6 +210,9 @@ class OpenFaucet(ArticulatedTask):
     success_text = "The handle is turned at least 80° from its reset angle."
     placements: ClassVar = {"faucet": Placement((0.3, 0.5), (-0.2, 0.2), (math.pi - 0.3,
                                                                            math.pi + 0.3))}
+    # The hand works at the lever's tip: 8 cm beyond the faucet's centre (which faces the
+    # robot, yaw about pi), 18.5 cm above the table (`articulated.add_faucet`).
+    workspace = (placements["faucet"].centre[0] + 0.08, placements["faucet"].centre[1], 0.185)
     joint, min_turn = "faucet/handle", math.radians(80.0)
     expert = TurnPlan("faucet", "handle_tip")
 

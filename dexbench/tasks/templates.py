@@ -45,6 +45,11 @@ class Placement:
     clearance: float = 0.02
     z: float = 0.0
 
+    @property
+    def centre(self) -> tuple[float, float]:
+        """The region's centre (x, y): where a task declares its `workspace` from."""
+        return ((self.x[0] + self.x[1]) / 2, (self.y[0] + self.y[1]) / 2)
+
 
 def yaw_quat(yaw: float) -> np.ndarray:
     """Quaternion (w, x, y, z) of a rotation about world z."""
