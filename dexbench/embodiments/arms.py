@@ -31,7 +31,20 @@ class ArmSpec:
 
     `armature` (kg m^2) is a floor on every arm joint's rotor inertia. Without any (the
     xArm7 model), a wrist servo that hits its force limit (kv 80 on a light link) locks
-    into a bang-bang chatter at the 240 Hz step, ~0.2 rad off its target for good.
+    into a bang-bang chatter at the 240 Hz step, ~0.2 rad off its target for good. The
+    UR10e's wrist servos (kp 5000, limit 56 Nm: saturated 0.011 rad off) did the same
+    with the model's 0.1 under the Shadow hand, pinned at their limits 94-100% of the
+    time and shaking the palm (wrist 3 at 1 rad/s rms holding still); 0.5, of the order
+    of a harmonic-drive joint's reflected rotor inertia, settles them.
+
+    `damping_ratio`, where set, makes each joint servo's velocity gain that fraction of
+    critical damping for the joint's inertia at the home pose, hand included (the
+    position gain stays the model's). The FR3 model's own kv = kp/10 is 2-5 times
+    critical there: an overdamped servo lags its target by ~0.1 s, which put the palm
+    2-4 cm behind a moving command (the floating wrist: <1 cm) and, pushing, made the
+    experts take their plan for blocked over and over. The UR10e keeps its model's kv:
+    its light wrist links (kp 5000, force limit 56 Nm) need that damping, implicit in
+    the integrator, to stay out of a bang-bang chatter at the 240 Hz step.
     """
 
     name: str
@@ -41,6 +54,7 @@ class ArmSpec:
     hand_rot: np.ndarray
     flange_reach: float = 0.4
     armature: float = 0.0
+    damping_ratio: float | None = None
 
 
 ARMS: dict[str, ArmSpec] = {
@@ -51,6 +65,7 @@ ARMS: dict[str, ArmSpec] = {
         seed_qpos=(0.0, -0.2, 0.0, -2.8, 0.0, 2.7, 0.0),
         hand_rot=FLAT_MOUNT,
         flange_reach=0.37,
+        damping_ratio=1.0,
     ),
     "ur10e": ArmSpec(
         name="ur10e",
@@ -59,6 +74,7 @@ ARMS: dict[str, ArmSpec] = {
         seed_qpos=(2.7, -1.4, 2.4, -1.0, 1.2, -1.57),
         hand_rot=INLINE_MOUNT,
         flange_reach=0.55,
+        armature=0.5,
     ),
     "xarm7": ArmSpec(
         name="xarm7",

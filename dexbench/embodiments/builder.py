@@ -306,6 +306,47 @@ def arm_home(arm: str, hand: str, side: str) -> tuple[tuple[str, float], ...]:
     return tuple((j, float(v)) for j, v in zip(layout.mount_joints, q, strict=True))
 
 
+@functools.cache
+def arm_servo_damping(arm: str, hand: str, side: str) -> tuple[tuple[str, float], ...]:
+    """(actuator, kv) for each arm joint servo: `ArmSpec.damping_ratio` of critical
+    damping for the joint's inertia at the home pose with the hand on, less the joint's
+    own damping (solved once per (arm, hand, side) on a robot-only model); none without
+    a ratio (the model's gains stay)."""
+    ratio = ARMS[arm].damping_ratio
+    if ratio is None:
+        return ()
+    spec = new_spec()
+    home = dict(arm_home(arm, hand, side))
+    layout = _add_arm_side(spec, arm, hand, side, (HOME_PALM_X, 0.0, HOME_PALM_Z), home)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    for j, q in home.items():
+        data.qpos[model.joint(j).qposadr[0]] = q
+    mujoco.mj_forward(model, data)
+    inertia = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, inertia)
+    out = []
+    for a in range(model.nu):
+        joint = model.actuator_trnid[a, 0]
+        if (model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT
+                or model.joint(joint).name not in layout.mount_joints):
+            continue
+        dof = model.jnt_dofadr[joint]
+        critical = 2.0 * np.sqrt(model.actuator_gainprm[a, 0] * inertia[dof, dof])
+        kv = ratio * critical - model.dof_damping[dof]
+        out.append((model.actuator(a).name, float(max(kv, 0.0))))
+    return tuple(out)
+
+
+def _damp_arm_servos(spec: mujoco.MjSpec, damping: tuple[tuple[str, float], ...]) -> None:
+    """Give the arm's position servos their velocity gains (`arm_servo_damping`)."""
+    for name, kv in damping:
+        act = spec.actuator(name)
+        bias = np.array(act.biasprm)
+        bias[2] = -kv
+        act.biasprm = bias
+
+
 def add_embodiment(spec: mujoco.MjSpec, embodiment: str,
                    workspace: tuple[float, float, float] = DEFAULT_WORKSPACE) -> EmbodimentPlan:
     """Add an embodiment to `spec`, its arms placed for a task working around `workspace`
@@ -321,6 +362,7 @@ def add_embodiment(spec: mujoco.MjSpec, embodiment: str,
         else:
             home = dict(arm_home(name.mount, name.hand, side))
             layout = _add_arm_side(spec, name.mount, name.hand, side, palm, home)
+            _damp_arm_servos(spec, arm_servo_damping(name.mount, name.hand, side))
         sides[side] = layout
         geo = hand_geometry(name.hand, side)
         for pose in targets:
