@@ -196,9 +196,10 @@ def add_primitive_set(spec: mujoco.MjSpec, names: Sequence[str],
 
 def add_tray(spec: mujoco.MjSpec, name: str, size: tuple[float, float] = (0.20, 0.14),
              mass: float = 0.5, rim: float = 0.025) -> ObjectInfo:
-    """A flat tray (half extents `size`) with a low rim, lifted by its two short sides.
+    """A flat tray (half extents `size`) with a low rim, lifted by two opposite sides.
 
-    Points `grip_xpos` / `grip_xneg` are the middles of the short (+x / -x) rim walls.
+    Points `grip_xpos` / `grip_xneg` are the middles of the short (+x / -x) rim walls,
+    `grip_ypos` / `grip_yneg` those of the long (+y / -y) ones.
     """
     body = free_body(spec, name)
     hx, hy, t = size[0], size[1], 0.006
@@ -211,7 +212,9 @@ def add_tray(spec: mujoco.MjSpec, name: str, size: tuple[float, float] = (0.20, 
     grip_z = 2 * t + rim / 2
     return ObjectInfo(name, name, f"{name}/free", False, 0.0, float(math.hypot(hx, hy)),
                       points={"grip_xpos": (name, (hx, 0.0, grip_z)),
-                              "grip_xneg": (name, (-hx, 0.0, grip_z))},
+                              "grip_xneg": (name, (-hx, 0.0, grip_z)),
+                              "grip_ypos": (name, (0.0, hy, grip_z)),
+                              "grip_yneg": (name, (0.0, -hy, grip_z))},
                       axes={"up": (name, UP)})
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+import mujoco
 import numpy as np
 import torch
 
@@ -56,6 +57,8 @@ CUBE_HALF = 0.025  # m: `grasp_offset` is where a 5 cm cube's centre sits in the
 
 
 FLOOR_GAP = 0.015  # m: a pressing hand's longest fingertip above the object's base
+HOOK_INSIDE = 0.02  # m: a hooking hand's closed fingertips past the grip point (a rim's
+# middle): half the rim's thickness, a fingertip's radius and some play
 
 
 def facing(yaw: np.ndarray) -> np.ndarray:
@@ -101,6 +104,7 @@ class TwoHandLiftExpert:
         self.grip_rot = {s: eye.copy() for s in plan.grips}
         self.held = {s: np.zeros((n, 3)) for s in plan.grips}
         self.offset = {s: self._offset.copy() for s in plan.grips}
+        self.full = dict.fromkeys(plan.grips, 1.0)  # a closed hand's closure: see `_hook`
 
     def _palm(self, side: str) -> tuple[np.ndarray, np.ndarray]:
         return site_pose(self.env, self._palm_site[side])
@@ -129,10 +133,47 @@ class TwoHandLiftExpert:
         base = view.body_pos(self.body)[env, 2] - self._rest
         return float(reach + FLOOR_GAP - (point - base))
 
+    def _hook(self, side: str, env: int) -> tuple[float, np.ndarray]:
+        """The closure at which the fingertips (thumb aside) reach deepest below the palm,
+        a hook: fingers that curl on back under the palm (the Allegro's) would lift off
+        the rim again. And where the grip point lies in the hand frame for those tips to
+        end `HOOK_INSIDE` past it along the fingers, level with it and centred across them.
+        Kinematics of the joints between `open` and `power` on env `env`'s state, in a
+        scratch copy: the hands are open when this is needed."""
+        model, emb = self.env.scene.model, self.env.embodiment
+        data = mujoco.MjData(model)
+        data.qpos[:] = self.env.sim.field("qpos")[env].cpu().numpy()
+        opened, closed = self.adapter.pose("open"), self.adapter.pose("power")
+        joints = []  # (action index, qpos addresses, their share of the target)
+        for i in emb.hand_actuators(side):
+            act = model.actuator(emb.actuators[i])
+            if act.trntype[0] == mujoco.mjtTrn.mjTRN_JOINT:
+                joints.append((i, [model.jnt_qposadr[act.trnid[0]]], 1.0 / act.gear[0]))
+            elif act.trntype[0] == mujoco.mjtTrn.mjTRN_TENDON:  # coupled joints share it
+                first = model.tendon_adr[act.trnid[0]]
+                wraps = range(first, first + model.tendon_num[act.trnid[0]])
+                coef = sum(model.wrap_prm[w] for w in wraps)
+                joints.append((i, [model.jnt_qposadr[model.wrap_objid[w]] for w in wraps],
+                               1.0 / (act.gear[0] * coef)))
+        palm, tip_sites = self._palm_site[side], self._tip_sites[side][1:]
+        best = (-np.inf, 1.0, np.zeros(3))
+        for closure in np.linspace(0.0, 1.0, 21):
+            for i, adr, share in joints:
+                data.qpos[adr] = (opened[i] + closure * (closed[i] - opened[i])) * share
+            mujoco.mj_kinematics(model, data)
+            rot = data.site_xmat[palm].reshape(3, 3)
+            tips = ((data.site_xpos[tip_sites] - data.site_xpos[palm]) @ rot).mean(axis=0)
+            if tips[2] > best[0] + 1e-4:
+                best = (tips[2], closure, tips)
+        return float(best[1]), best[2] - [HOOK_INSIDE, 0.0, 0.0]
+
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
         for side, mirror in self._mirror(int(ids[0])).items():
             self.offset[side] = self._offset * [1.0, mirror, 1.0]
+            if self.plan.hook:
+                self.full[side], grip = self._hook(side, int(ids[0]))
+                self.offset[side] = grip + np.multiply(self.plan.shift, [1.0, mirror, 1.0])
             if self.plan.press:
                 self.offset[side][0] = self._hang(side, int(ids[0]))
             pos, rot = self._palm(side)
@@ -230,7 +271,7 @@ class TwoHandLiftExpert:
         for s in sides:
             self.pos[s], self.rot[s] = step_towards(self.pos[s], self.rot[s], target_pos[s],
                                                     target_rot[s], speed, TURN_RATE * self._dt)
-            commands[s] = HandCommand(self.pos[s], self.rot[s], self.closure)
+            commands[s] = HandCommand(self.pos[s], self.rot[s], self.full[s] * self.closure)
         return self.adapter.actions(commands)
 
     def _advance(self, mask: np.ndarray, phase: Phase) -> None:

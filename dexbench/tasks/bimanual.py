@@ -26,11 +26,12 @@ class BimanualLiftTray(LiftTask):
     default_embodiment = "bimanual_floating_shadow"
     placements: ClassVar = {"tray": Placement((0.02, 0.08), (-0.10, 0.10), (-0.2, 0.2))}
     lifted, lift_threshold, max_tilt = "tray", 0.20, 10.0
-    # Each hand hooks one short rim wall, fingers along the tray's long axis. Centred
-    # between the fingers, the tray hangs ~5 deg low on the thumb side; with its centre
-    # line 3 cm towards the little finger (hand frame y = +0.03) it hangs level.
-    expert = TwoHandPlan("tray", {"right": "grip_xneg", "left": "grip_xpos"},
-                         shift=(0.0, 0.043, 0.0))
+    # Each hand hooks the middle of the long rim wall on its own side, as a person facing
+    # the tray lifts it: the far short rim is out of an arm's reach (or only at a turned
+    # wrist). Each hand is placed by its own fingers' hook, not its cube grasp, and pulls
+    # 4 cm: the fingertips press the rims' inner faces firmly enough for every hand.
+    expert = TwoHandPlan("tray", {"right": "grip_yneg", "left": "grip_ypos"}, pull=0.04,
+                         hook=True)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"tray": objects.add_tray(spec, "tray")}

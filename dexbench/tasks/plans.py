@@ -306,7 +306,12 @@ class TwoHandPlan:
     closed hands draw back along their fingers, `lift` (m) how high they then rise.
     With `press` (a closed box: no rim to hook) each open palm faces its grip point, a
     side face's middle, fingers down to just above the object's base, and pushes `pull`
-    m on into it: the two pushes squeeze the object between the palms."""
+    m on into it: the two pushes squeeze the object between the palms. With `hook` each
+    hand closes only as far as its fingertips reach deepest (a hook) and is placed, before
+    `shift`, by where they then end: just past the grip point (a rim's middle), level with
+    it, centred across the fingers. Placed by its cube grasp instead, a hand whose fingers
+    are shorter or curl further than that grasp's geometry suggests closes them on or
+    outside the rim, under the object, and flips it."""
 
     obj: str
     grips: Mapping[str, str]
@@ -314,6 +319,7 @@ class TwoHandPlan:
     pull: float = 0.025
     lift: float = 0.27
     press: bool = False
+    hook: bool = False
 
 
 @dataclass(frozen=True)
