@@ -17,6 +17,9 @@ from dexbench.cli.config import ConfigError, runs_root
 from dexbench.embodiments.builder import HOME_PALM_ROT, HOME_PALM_X, HOME_PALM_Z
 from dexbench.eval import feasibility, matrix
 from dexbench.eval.feasibility import POS_TOL, ROT_TOL, verdict
+from dexbench.eval.runner import run_episodes
+from dexbench.policies.registry import policy_module
+from dexbench.tasks.registry import make_env
 
 SINGLE = ["floating_leap", "fr3_leap", "ur10e_leap"]
 
@@ -190,3 +193,14 @@ def test_resume_skips_complete_cells(monkeypatch: pytest.MonkeyPatch,
     monkeypatch.setattr(OmegaConf, "to_container", plain)
     with pytest.raises(ConfigError, match="other settings \\(episodes\\)"):
         matrix_cli.main([*argv[:2], "episodes=2"])
+
+
+def test_palm_recorder_runs_the_evaluator_loop() -> None:
+    """The reach test records palm paths through `run_episodes`, which passes `observe=`."""
+    env = make_env("PickCube", "floating_shadow", num_envs=1, seed=0, nthread=1)
+    env.episode_steps = 5
+    recorder = feasibility._PalmRecorder(env)
+    ends = []
+    run_episodes(recorder, policy_module("expert").build(None, env, "cpu", {}), [0], 0,
+                 ends.append)
+    assert [e.steps for e in ends] == [5] and len(recorder.paths[0]) == 6

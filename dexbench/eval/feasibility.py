@@ -105,8 +105,8 @@ class _PalmRecorder:
                                                               rot[slot].copy()))
         return obs
 
-    def step(self, actions) -> Any:
-        out = self._env.step(actions)
+    def step(self, actions, observe=None) -> Any:
+        out = self._env.step(actions, observe=observe)
         self._record()
         return out
 
