@@ -103,3 +103,14 @@ def test_faucet_arm_moves_floating_stays() -> None:
     pedestal = compose_scene(faucet(), "fr3_shadow", PhysicsOptions()).model.geom(
         "right/pedestal")
     np.testing.assert_allclose(2 * pedestal.size[1], faucet.workspace[2], atol=1e-9)
+
+
+def test_pan_workspace_between_pan_and_stove() -> None:
+    """GraspPan's hand carries the pan from its place to the stove: the declared workspace
+    lies between their reset regions, on the table."""
+    task = TASKS["GraspPan"]
+    pan, stove = task.placements["pan"], task.placements["stove"]
+    x, y, z = task.workspace
+    assert pan.x[1] < x < stove.x[0]
+    assert max(pan.y[0], stove.y[0]) <= y <= min(pan.y[1], stove.y[1])
+    assert z == 0.0

@@ -54,6 +54,9 @@ class GraspPan(TabletopTask):
     placements: ClassVar = {
         "pan": Placement((-0.15, -0.05), (-0.30, 0.30), (math.pi - 0.4, math.pi + 0.4)),
         "stove": Placement((0.20, 0.40), (-0.20, 0.20), (-0.3, 0.3), clearance=-0.3)}
+    # The hand carries the pan from its place to the stove: midway between their centres.
+    workspace = ((placements["pan"].centre[0] + placements["stove"].centre[0]) / 2,
+                 (placements["pan"].centre[1] + placements["stove"].centre[1]) / 2, 0.0)
     max_tilt, tolerance = 10.0, 0.025
     # Across the handle near the rim (the shortest lever for the pan's weight), the palm
     # low so the fingers close under the handle. The pan tilts 10-30 deg in the Shadow
