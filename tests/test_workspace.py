@@ -13,8 +13,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from dexbench.assets.objects import new_spec
-from dexbench.embodiments.builder import DEFAULT_WORKSPACE, add_embodiment
+from dexbench.embodiments.builder import DEFAULT_WORKSPACE, add_embodiment, robot_at_home
 from dexbench.envs.arena import PhysicsOptions, build_arena
 from dexbench.envs.scene import compose_scene
 from dexbench.eval.feasibility import ik_residuals
@@ -31,14 +30,7 @@ OFFSET = (0.4, 0.1, 0.2)
 def _robot(name: str, workspace: tuple[float, float, float] = DEFAULT_WORKSPACE
            ) -> tuple[mujoco.MjModel, mujoco.MjData, dict]:
     """A robot-only model at home, and its sides' layouts."""
-    spec = new_spec()
-    plan = add_embodiment(spec, name, workspace)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    for side in plan.sides.values():
-        for joint, q in side.home_qpos.items():
-            data.qpos[model.joint(joint).qposadr[0]] = q
-    mujoco.mj_kinematics(model, data)
+    model, data, plan = robot_at_home(name, workspace)
     return model, data, plan.sides
 
 

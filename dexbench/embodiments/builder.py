@@ -27,6 +27,7 @@ TABLE_TOP_Z = 0.6
 TABLE_HALF_SIZE = (0.6, 0.75)  # table top spans x in [-0.6, 0.6], y in [-0.75, 0.75]
 HOME_PALM_X = -0.25
 HOME_PALM_Z = 0.8
+DEFAULT_HOME_PALM = (HOME_PALM_X, 0.0, HOME_PALM_Z)  # one side's home, default workspace
 # Where a task's hands work (world x, y, height above the table top) unless it declares
 # otherwise (`Task.workspace`): the table centre. Arms and their homes are placed from it.
 DEFAULT_WORKSPACE = (0.0, 0.0, 0.0)
@@ -283,6 +284,23 @@ def _palm_home(name: EmbodimentName, side: str,
     return (HOME_PALM_X + dx, y + dy, HOME_PALM_Z + dz)
 
 
+def _set_joints(model: mujoco.MjModel, data: mujoco.MjData, values: dict[str, float]) -> None:
+    for joint, q in values.items():
+        data.qpos[model.joint(joint).qposadr[0]] = q
+
+
+def _arm_only(arm: str, hand: str, side: str, home: dict[str, float] | None
+              ) -> tuple[mujoco.MjModel, mujoco.MjData, SideLayout]:
+    """A robot-only model of one arm side at the default home palm, its joints at `home`
+    (None: the arm's IK seed)."""
+    spec = new_spec()
+    layout = _add_arm_side(spec, arm, hand, side, DEFAULT_HOME_PALM, home)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    _set_joints(model, data, layout.home_qpos)
+    return model, data, layout
+
+
 @functools.cache
 def arm_home(arm: str, hand: str, side: str) -> tuple[tuple[str, float], ...]:
     """Arm joint angles that put the hand frame at its home pose (palm down, fingers +x).
@@ -291,15 +309,9 @@ def arm_home(arm: str, hand: str, side: str) -> tuple[tuple[str, float], ...]:
     is the same for every offset, so y = 0 serves the bimanual sides and the default
     workspace every task's (`_palm_home`).
     """
-    spec = new_spec()
-    palm = (HOME_PALM_X, 0.0, HOME_PALM_Z)
-    layout = _add_arm_side(spec, arm, hand, side, palm, None)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    for j, q in layout.home_qpos.items():
-        data.qpos[model.joint(j).qposadr[0]] = q
+    model, data, layout = _arm_only(arm, hand, side, None)
     q, err = solve_site_pose(model, data, layout.palm_site, list(layout.mount_joints),
-                             np.array(palm), HOME_PALM_ROT, iterations=500)
+                             np.array(DEFAULT_HOME_PALM), HOME_PALM_ROT, iterations=500)
     if err > 1e-3:
         raise RuntimeError(f"no home pose for arm {arm} with hand {hand} ({side}): "
                            f"IK error {err:.4f}; adjust ArmSpec.seed_qpos or flange_reach")
@@ -315,13 +327,7 @@ def arm_servo_damping(arm: str, hand: str, side: str) -> tuple[tuple[str, float]
     ratio = ARMS[arm].damping_ratio
     if ratio is None:
         return ()
-    spec = new_spec()
-    home = dict(arm_home(arm, hand, side))
-    layout = _add_arm_side(spec, arm, hand, side, (HOME_PALM_X, 0.0, HOME_PALM_Z), home)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    for j, q in home.items():
-        data.qpos[model.joint(j).qposadr[0]] = q
+    model, data, layout = _arm_only(arm, hand, side, dict(arm_home(arm, hand, side)))
     mujoco.mj_forward(model, data)
     inertia = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, inertia)
@@ -370,3 +376,17 @@ def add_embodiment(spec: mujoco.MjSpec, embodiment: str,
                 targets[pose][f"{side}/hand/{act}"] = float(value)
         hand_qpos.update({f"{side}/hand/{j}": q for j, q in geo.open_qpos.items()})
     return EmbodimentPlan(name, sides, targets, hand_qpos)
+
+
+def robot_at_home(embodiment: str, workspace: tuple[float, float, float] = DEFAULT_WORKSPACE
+                  ) -> tuple[mujoco.MjModel, mujoco.MjData, EmbodimentPlan]:
+    """A robot-only model of `embodiment`, placed for `workspace` as a task's scene places
+    it, every joint at home and its kinematics computed: where IK and reach checks start."""
+    spec = new_spec()
+    plan = add_embodiment(spec, embodiment, workspace)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    for layout in plan.sides.values():
+        _set_joints(model, data, layout.home_qpos)
+    mujoco.mj_kinematics(model, data)
+    return model, data, plan

@@ -43,8 +43,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from dexbench.assets.objects import new_spec
-from dexbench.embodiments.builder import DEFAULT_WORKSPACE, add_embodiment, parse_embodiment
+from dexbench.embodiments.builder import DEFAULT_WORKSPACE, parse_embodiment, robot_at_home
 from dexbench.embodiments.ik import solve_site_pose
 from dexbench.envs.dex_env import DexEnv
 from dexbench.eval.plan import TaskPlan
@@ -149,13 +148,7 @@ class _Robot:
 @functools.cache
 def _robot(embodiment: str, workspace: tuple[float, float, float]) -> _Robot:
     """Placed for the task's workspace, as the task's scene places it."""
-    spec = new_spec()
-    plan = add_embodiment(spec, embodiment, workspace)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    for layout in plan.sides.values():
-        for joint, q in layout.home_qpos.items():
-            data.qpos[model.joint(joint).qposadr[0]] = q
+    model, data, plan = robot_at_home(embodiment, workspace)
     sides = tuple((s.palm_site, s.mount_joints) for s in plan.sides.values())
     return _Robot(model, data.qpos.copy(), sides)
 

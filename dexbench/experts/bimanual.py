@@ -105,6 +105,7 @@ class TwoHandLiftExpert:
         self.held = {s: np.zeros((n, 3)) for s in plan.grips}
         self.offset = {s: self._offset.copy() for s in plan.grips}
         self.full = dict.fromkeys(plan.grips, 1.0)  # a closed hand's closure: see `_hook`
+        self._hooks: dict[str, tuple[float, np.ndarray]] = {}  # per side, from the first reset
 
     def _palm(self, side: str) -> tuple[np.ndarray, np.ndarray]:
         return site_pose(self.env, self._palm_site[side])
@@ -171,8 +172,10 @@ class TwoHandLiftExpert:
         ids = host_ids(env_ids)
         for side, mirror in self._mirror(int(ids[0])).items():
             self.offset[side] = self._offset * [1.0, mirror, 1.0]
-            if self.plan.hook:
-                self.full[side], grip = self._hook(side, int(ids[0]))
+            if self.plan.hook:  # the hand's own geometry: the same at every reset
+                if side not in self._hooks:
+                    self._hooks[side] = self._hook(side, int(ids[0]))
+                self.full[side], grip = self._hooks[side]
                 self.offset[side] = grip + np.multiply(self.plan.shift, [1.0, mirror, 1.0])
             if self.plan.press:
                 self.offset[side][0] = self._hang(side, int(ids[0]))
