@@ -7,10 +7,13 @@ import numpy as np
 import pytest
 import torch
 
-from dexbench.cli.config import load_config
+from dexbench.cli.config import ConfigError, load_config
 from dexbench.cli.rl import build_env, train
+from dexbench.data.collect import CollectSettings, collect
+from dexbench.experts import make_expert
 from dexbench.policies import rl as rl_policy
 from dexbench.rl.actions import ActionMap, delta_targets
+from dexbench.rl.demo_starts import DemoStarts
 from dexbench.rl.rewards import RewardTerms, check_terms
 from dexbench.rl.vec_env import RslVecEnv
 from dexbench.tasks.registry import make_env
@@ -196,3 +199,58 @@ def test_sb3_smoke_run_and_its_policy_in_the_evaluator(tmp_path, monkeypatch, al
     action = rl_policy.build(str(run), env, "cpu", {}).act(env.reset())
     assert action.shape == (2, env.action_dim)
     assert (action >= env.action_low).all() and (action <= env.action_high).all()
+
+
+@pytest.fixture(scope="module")
+def pick_demos(tmp_path_factory):
+    """Two PickCube demonstrations by the scripted expert."""
+    env = make_env("PickCube", num_envs=2, seed=3, nthread=1)
+    root = tmp_path_factory.mktemp("demos") / "PickCube"
+    stats = collect(env, make_expert(env), root, CollectSettings(2, 6, post_success_steps=2),
+                    {}, progress=False)
+    assert stats["successes"] == 2
+    return root
+
+
+def test_demo_starts_restore_recorded_frames_and_stay_out_of_the_success_curve(vec, pick_demos):
+    env = vec.env
+    starts = DemoStarts.from_dataset(pick_demos, env, fraction=1.0, seed=0)
+    short = RslVecEnv(env, vec.action_map, _DEFAULT, steps_per_iteration=1, episode_steps=1,
+                      starts=starts)
+    zero = torch.zeros(3, short.num_actions)
+    obs, _, dones, _ = short.step(zero)  # the first episodes time out; all restart from demos
+    assert dones.tolist() == [1, 1, 1] and short.curve.points[-1]["episodes"] == 3
+    frames = torch.from_numpy(starts.states)
+    state = env.sim_state().cpu()
+    match = (state[:, None, :] == frames[None]).all(dim=2)  # (envs, frames)
+    assert match.any(dim=1).all()  # every env is exactly at a recorded frame
+    chosen = match.float().argmax(dim=1).numpy()
+    np.testing.assert_allclose(env.last_action.cpu().numpy(), starts.before[chosen])
+    assert env.steps.tolist() == [0, 0, 0]
+    assert torch.isfinite(obs["actor"]).all()
+    short.step(zero)  # episodes that began at a demonstration frame are not counted
+    assert short.curve.points[-1]["episodes"] == 0
+    none = DemoStarts.from_dataset(pick_demos, env, fraction=0.0, seed=0)
+    _, moved = none.start(env, torch.arange(3), env.reset())
+    assert len(moved) == 0
+
+
+def test_demo_starts_refuse_another_task_and_a_bad_share(pick_demos, tmp_path, monkeypatch):
+    other = make_env("StackCube", num_envs=1, nthread=1)
+    with pytest.raises(ValueError, match=r"collect\.py task=StackCube"):
+        DemoStarts.from_dataset(pick_demos, other, fraction=0.5, seed=0)
+    monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
+    common = ["sim.backend=cpu", "num_envs=2", "sim.nthread=1", "rl.max_iterations=1"]
+    with pytest.raises(ConfigError, match=r"collect\.py task=PickCube"):
+        train([*common, "rl.demo_starts.dataset=auto"])
+    with pytest.raises(ConfigError, match=r"\[0, 1\]"):
+        train([*common, f"rl.demo_starts.dataset={pick_demos}", "rl.demo_starts.fraction=2"])
+
+
+def test_ppo_smoke_run_with_demo_starts(pick_demos, tmp_path, monkeypatch):
+    monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
+    result = train(["sim.backend=cpu", "num_envs=4", "sim.nthread=1", "rl.max_iterations=2",
+                    "rl.chunk=1", "rl.network.hidden_dims=[32,32]", "rl.episode_seconds=0.1",
+                    f"rl.demo_starts.dataset={pick_demos}", "rl.demo_starts.fraction=0.5"])
+    assert result["iterations"] == 2
+

@@ -5,9 +5,11 @@ reward plus grasp and action terms by default; `dexbench.rl.rewards`) with the s
 observation groups for the actor and those plus `privileged` for the critic, on
 `sim.backend` (warp on a GPU; cpu for smoke tests: `sim.backend=cpu num_envs=4
 rl.max_iterations=2`). Stops after `rl.max_iterations` or
-`rl.max_minutes`, whichever comes first. Writes `runs/rl/<timestamp>-<task>-<emb>/`
-(Hydra's run folder):
-config, RSL-RL checkpoints (`model_<it>.pt`) and TensorBoard logs, `policy.json` (what
+`rl.max_minutes`, whichever comes first. `rl.demo_starts.dataset=<folder>|auto` starts a
+share (`rl.demo_starts.fraction`) of the training episodes from the expert's recorded
+demonstrations (`dexbench.rl.demo_starts`; auto: `runs/datasets/<task>/<emb>/seed0`).
+Writes `runs/rl/<timestamp>-<task>-<emb>/` (Hydra's run folder): config, RSL-RL
+checkpoints (`model_<it>.pt`) and TensorBoard logs, `policy.json` (what
 `python eval.py policy=rl checkpoint=<folder>` needs), `curve.jsonl` and `curve.png`
 (success of finished training episodes vs wall time) and `metrics.json`; with
 `wandb.enabled=true` (conf/wandb/: offline by default) each curve point goes to W&B too,
@@ -33,6 +35,7 @@ from dexbench.cli.config import (
     env_kwargs,
     load_config,
     open_run_dir,
+    runs_root,
     write_atomic,
 )
 from dexbench.cli.rl_sb3 import record_curve, train_sb3
@@ -47,6 +50,7 @@ from dexbench.policies.rl import META_FILE
 from dexbench.rl.actions import ActionMap
 from dexbench.rl.config import runner_config
 from dexbench.rl.curve import plot_curve
+from dexbench.rl.demo_starts import DemoStarts
 from dexbench.rl.rewards import check_terms
 from dexbench.rl.sb3_env import ALGOS
 from dexbench.rl.vec_env import ACTOR_GROUPS, CRITIC_EXTRA, RslVecEnv
@@ -88,6 +92,33 @@ def episode_steps(cfg: DictConfig, env: DexEnv) -> int | None:
     return steps
 
 
+def demo_dataset(cfg: DictConfig) -> pathlib.Path | None:
+    """`rl.demo_starts.dataset`: None (off), a folder, or `auto`, the folder `python
+    collect.py task=<T> embodiment=<E>` writes; an error that says how to make it."""
+    name = cfg.rl.demo_starts.dataset
+    if name is None:
+        return None
+    embodiment = default_embodiment(cfg)
+    path = (runs_root() / "datasets" / cfg.task / embodiment / "seed0" if name == "auto"
+            else pathlib.Path(str(name)))
+    if not path.is_dir():
+        raise ConfigError(f"rl.demo_starts.dataset: no demonstrations at {path}; collect them "
+                          f"with `python collect.py task={cfg.task} embodiment={embodiment} "
+                          "num_demos=50` (or pass rl.demo_starts.dataset=<folder>)")
+    return path
+
+
+def demo_starts(cfg: DictConfig, env: DexEnv) -> DemoStarts | None:
+    path = demo_dataset(cfg)
+    if path is None:
+        return None
+    try:
+        return DemoStarts.from_dataset(path, env, float(cfg.rl.demo_starts.fraction),
+                                       int(cfg.seed))
+    except ValueError as err:
+        raise ConfigError(f"rl.demo_starts: {err}") from None
+
+
 def _meta(cfg: DictConfig, env: DexEnv, vec: RslVecEnv) -> dict:
     obs = vec.get_observations()
     return {"task": env.task.name, "embodiment": env.embodiment.name,
@@ -118,6 +149,10 @@ def check(cfg: DictConfig, overrides: list[str]) -> None:
         raise ConfigError(missing)
     env_kwargs(cfg)
     check_pair(task_class(cfg.task), default_embodiment(cfg))
+    if not 0.0 <= float(rl.demo_starts.fraction) <= 1.0:
+        raise ConfigError(f"rl.demo_starts.fraction={rl.demo_starts.fraction}: use a share "
+                          "in [0, 1]")
+    demo_dataset(cfg)
 
 
 def run_dir(cfg: DictConfig) -> tuple[str, str]:
@@ -138,7 +173,8 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
     run_dir = open_run_dir(out, cfg)
     vec = RslVecEnv(env, action_map(cfg, env), OmegaConf.to_container(rl.rewards),
                     int(rl.num_steps_per_env), episode_steps(cfg, env),
-                    cfg=OmegaConf.to_container(cfg, resolve=True))
+                    cfg=OmegaConf.to_container(cfg, resolve=True),
+                    starts=demo_starts(cfg, env))
     write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")
     wandb_run = start_wandb(run_dir, OmegaConf.to_container(cfg, resolve=True),
                             OmegaConf.to_container(cfg.wandb), "rl")

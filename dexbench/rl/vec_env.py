@@ -9,8 +9,10 @@ them there would make success cost the positive reward of every later step, so P
 learn to hover just short of it; the policy instead learns to reach success and hold it.
 An episode counts as solved when the env's success (the condition held for
 `SUCCESS_HOLD_STEPS`) occurred in it, as in the evaluator. Environments reset inside `step`
-at the time limit, which RSL-RL bootstraps (`time_outs`). Per-iteration success and reward
-go to `curve` (success vs wall time).
+at the time limit, which RSL-RL bootstraps (`time_outs`); with `starts`, a share of those
+resets continue from expert demonstration frames (`dexbench.rl.demo_starts`). Per-iteration
+success and reward go to `curve` (success vs wall time), counting only the episodes that
+began at the task's own reset.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from tensordict import TensorDict
 
 from dexbench.envs.dex_env import DexEnv
 from dexbench.rl.actions import ActionMap
+from dexbench.rl.demo_starts import DemoStarts
 from dexbench.rl.rewards import RewardTerms
 
 ACTOR_GROUPS = ("policy", "proprio", "contact", "state", "goal")
@@ -70,7 +73,7 @@ class RslVecEnv(VecEnv):
 
     def __init__(self, env: DexEnv, action_map: ActionMap, rewards: Mapping[str, Mapping],
                  steps_per_iteration: int, episode_steps: int | None = None,
-                 cfg: dict | None = None) -> None:
+                 cfg: dict | None = None, starts: DemoStarts | None = None) -> None:
         if env.auto_reset:
             raise ValueError("build the env with auto_reset=False: RslVecEnv resets it")
         self.env = env
@@ -91,6 +94,8 @@ class RslVecEnv(VecEnv):
         self._total_steps = 0
         self._prev_action = torch.zeros(env.num_envs, action_map.dim, device=env.device)
         self._solved = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
+        self.starts = starts
+        self._from_demo = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
         self._obs = env.reset()
         self.curve = Curve(env.device)
 
@@ -121,7 +126,7 @@ class RslVecEnv(VecEnv):
         reward, terms = self.rewards(task_reward, obs, action, self._prev_action)
         self._solved |= terminated
         done = env.steps >= self.max_episode_length
-        self.curve.add(done, self._solved, reward)
+        self.curve.add(done & ~self._from_demo, self._solved, reward)
         self._prev_action = action.clone()
         ids = done.nonzero().flatten()
         final = None
@@ -130,6 +135,10 @@ class RslVecEnv(VecEnv):
             obs = env.reset(ids)
             self._prev_action[ids] = 0.0
             self._solved[ids] = False
+            self._from_demo[ids] = False
+            if self.starts is not None:
+                obs, moved = self.starts.start(env, ids, obs)
+                self._from_demo[moved.to(self.device)] = True
         self._obs = obs
         self._total_steps += 1
         if self._total_steps % self._steps_per_iteration == 0:
