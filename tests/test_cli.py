@@ -121,6 +121,22 @@ def test_bench_train_rejects_no_jobs_in_one_line():
     assert out.stderr.strip().count("\n") == 0
 
 
+def test_bench_explore_counts_what_a_fresh_policy_reaches():
+    """Two 0.1 s training episodes per env of PickCube with the initial policy's noise."""
+    from dexbench.cli.bench_explore import BENCH_EXPLORE, explore_in
+
+    cfg = load_config("bench_explore", ["num_envs=3", "episodes=2", "sim.nthread=1",
+                                        "rl.episode_seconds=0.1"])
+    result = explore_in(cfg, BENCH_EXPLORE.folder(cfg, "t"))
+    assert result["env_steps"] == 3 * 2 * 6 and result["reset_episodes"] == 6
+    assert 0 <= result["held_lifted_step_share"] <= result["ever_held_env_share"] + 1e-9 <= 1
+    assert result["reset_success_rate"] == 0.0 and result["demo_starts"] is None
+    assert 0 <= result["max_lift_mean_m"] <= result["max_lift_max_m"] < 0.1
+    out = _run("bench.py", "explore", "episodes=0")
+    assert out.returncode == 2 and "episodes=0" in out.stderr
+    assert out.stderr.strip().count("\n") == 0
+
+
 def test_snapshot_writes_a_labelled_contact_sheet():
     import numpy as np
     from PIL import Image

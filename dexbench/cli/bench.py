@@ -9,8 +9,10 @@ model with `mujoco.batch` alone, from the same states and with the same controls
 mujoco_warp's ray tracer (`renderers=` picks).
 
 `python bench.py eval ...`: evaluation episodes/min (`dexbench/cli/eval.py`).
-`python bench.py train ...`: training steps/s (`dexbench/cli/bench_train.py`). Each verb is
-a Hydra main over `conf/bench_<verb>.yaml`; results go to `runs/bench/<timestamp>-<verb>-...`.
+`python bench.py train ...`: training steps/s (`dexbench/cli/bench_train.py`).
+`python bench.py explore ...`: what a fresh PPO policy reaches (`dexbench/cli/bench_explore.py`).
+Each verb is a Hydra main over `conf/bench_<verb>.yaml`; results go to
+`runs/bench/<timestamp>-<verb>-...`.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from omegaconf import DictConfig
 from tqdm import tqdm
 
 from dexbench.cli.app import Command, dispatch, register, stamp
+from dexbench.cli.bench_explore import BENCH_EXPLORE
 from dexbench.cli.bench_train import BENCH_TRAIN
 from dexbench.cli.bench_warp import bench_sim_warp
 from dexbench.cli.config import (
@@ -49,6 +52,7 @@ USAGE = """usage: python bench.py sim [num_envs=64] [task=PickCube] [embodiment=
        python bench.py eval [policy=dp] [checkpoint=...] [num_envs=50] [horizon=32]
                             [backends=[cpu,warp]] [warp_episodes=1000] ...
        python bench.py train [policy=dp3] [jobs=1] [steps=300] [device=auto] ...
+       python bench.py explore [task=PickCube] [num_envs=32] [rl.demo_starts.dataset=auto] ...
        python bench.py <verb> --help"""
 
 
@@ -247,7 +251,8 @@ def _print_render(cfg: DictConfig, _prepared: None, out: pathlib.Path) -> int:
 
 SIM = register(Command("bench_sim", _print_sim, check, _dir("sim")))
 RENDER = register(Command("bench_render", _print_render, check, _dir("render")))
-VERBS = {"sim": SIM, "render": RENDER, "eval": BENCH_EVAL, "train": BENCH_TRAIN}
+VERBS = {"sim": SIM, "render": RENDER, "eval": BENCH_EVAL, "train": BENCH_TRAIN,
+         "explore": BENCH_EXPLORE}
 
 
 def main(argv: list[str]) -> int:
