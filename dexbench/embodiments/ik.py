@@ -97,6 +97,45 @@ class Clearance:
         return out
 
 
+def multi_turn(model: mujoco.MjModel, joints: list[str]) -> np.ndarray:
+    """(len(joints),) whether each joint is a hinge turning more than a full turn
+    (unlimited, or its range spans more than 2 pi): there `q` and `q +- 2 pi` are the
+    same pose, and a warm-started IK keeps whichever it began near, not the one the arm
+    can turn to."""
+    jids = [model.joint(j).id for j in joints]
+    span = model.jnt_range[jids, 1] - model.jnt_range[jids, 0]
+    hinge = model.jnt_type[jids] == mujoco.mjtJoint.mjJNT_HINGE
+    return hinge & (~model.jnt_limited[jids].astype(bool) | (span > 2 * np.pi + 1e-6))
+
+
+def path_blocked(model: mujoco.MjModel, data: mujoco.MjData, qadr: np.ndarray,
+                 start: np.ndarray, end: np.ndarray, pairs: tuple[tuple[int, int], ...],
+                 step: float = 0.1) -> bool:
+    """Whether the straight joint path from `start` to `end` (`qpos[qadr]`, the rest of
+    `data.qpos` as it is) drives a geom pair into each other on its way: past touching
+    and deeper than at either end, so an arm already pressed against its own hand may
+    move apart, and a pose the IK puts just into it (the same at every turn of a joint)
+    counts against no path. Checked every `step` rad of the largest joint's travel, each
+    pair only where their bounding spheres overlap."""
+    geoms = np.array(pairs, dtype=int).reshape(-1, 2)
+    reach = model.geom_rbound[geoms].sum(axis=1)
+    fromto = np.zeros(6)
+    samples = max(1, int(np.ceil(np.abs(end - start).max() / step)))
+
+    def depths(k: int) -> np.ndarray:
+        """Each pair's penetration (negative distance) at sample `k`, 0 where apart."""
+        data.qpos[qadr] = start + (end - start) * k / samples
+        mujoco.mj_kinematics(model, data)
+        apart = np.linalg.norm(data.geom_xpos[geoms[:, 0]] - data.geom_xpos[geoms[:, 1]], axis=1)
+        out = np.zeros(len(geoms))
+        for p in np.flatnonzero(apart < reach):
+            out[p] = mujoco.mj_geomDistance(model, data, *geoms[p], 0.0, fromto)
+        return out
+
+    ends = np.minimum(depths(0), depths(samples))
+    return any((depths(k) < ends - 1e-3).any() for k in range(1, samples))
+
+
 def _rotation_error(current: np.ndarray, target: np.ndarray) -> np.ndarray:
     """Axis-angle vector (world frame) rotating `current` onto `target`."""
     quat = np.zeros(4)

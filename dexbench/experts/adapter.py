@@ -14,11 +14,16 @@ import mujoco
 import numpy as np
 import torch
 
-from dexbench.embodiments.ik import Clearance, solve_site_pose
+from dexbench.embodiments.ik import Clearance, multi_turn, path_blocked, solve_site_pose
 from dexbench.envs.dex_env import DexEnv
 
 IK_ITERATIONS = 10
 TABLE_CLEARANCE = 0.01  # m: arm links kept above the table top
+# A multi-turn joint this far behind its target (rad) and this slow towards it (rad/s)
+# has stalled: only then is its path checked (the check costs; a joint turning fast
+# trails by 0.2-0.8 rad).
+TURN_LAG, STALL_SPEED = 0.5, 0.1
+RECHECK_SECONDS = 0.5  # a stall where neither way is clear is checked again this late
 
 
 @dataclass
@@ -74,6 +79,19 @@ class ActionAdapter:
     hand allows, where a flange beside the hand (the FR3's, carrying it flat) would land
     on the table and prop the palm off its pose. The hand's own parts (the Shadow
     forearm) meet the table as they do on the floating mount.
+
+    A joint that turns more than a full turn (the UR10e's, the xArm7's) reaches the same
+    pose at `q - 2 pi` or `q + 2 pi`; the warm-started IK keeps following the one it
+    started near, whichever way is blocked. Turning the palm ~110 deg about the vertical
+    (GraspPan) drove the UR10e's wrist 2 from 1.17 to 3.80 rad, the Shadow forearm into
+    wrist 1 at 2.78 rad, and there it stalled with the palm 0.33 m off its target; the
+    same pose at -2.48 rad is a clear turn the other way. So when such a joint stalls
+    short of its target (`TURN_LAG`, `STALL_SPEED`) and the straight joint path from the
+    measured joints to the target drives the arm into itself, its hand or anything it
+    would touch (`_path_pairs`), the target goes the other way round if that path is
+    clear (`_other_way_round`). The IK goes on from the answer. An arm held where
+    neither way is clear is checked again only after `RECHECK_SECONDS` (at every step,
+    the checks cost a quarter of GraspCup's time on the UR10e).
     """
 
     def __init__(self, env: DexEnv, commanded_hand: bool = False) -> None:
@@ -103,8 +121,14 @@ class ActionAdapter:
                 np.array([model.actuator(emb.actuators[i]).gear[0] for i in held]))
         self._clearance = ({} if emb.mount == "floating" else
                            {side: self._table_clearance(side) for side in emb.sides})
+        self._turns = {side: multi_turn(model, joints)
+                       for side, (_, joints, _, _) in self._sides.items()}
+        self._pairs = {side: self._path_pairs(side) for side in emb.sides
+                       if self._turns[side].any()}
         self._poses = emb.poses
         self._solution: dict[str, np.ndarray] = {}
+        self._recheck = round(RECHECK_SECONDS / env.control_dt)
+        self._hold: dict[str, np.ndarray] = {}  # per side: each env's steps to the next check
 
     def _table_clearance(self, side: str) -> Clearance | None:
         """An arm side's moving link geoms (above the hand's root) against the table top;
@@ -123,6 +147,96 @@ class ActionAdapter:
             body = model.body_parentid[body]
         return Clearance(tuple((g, table) for g in moving), TABLE_CLEARANCE)
 
+    def _path_pairs(self, side: str) -> tuple[tuple[int, int], ...]:
+        """The geom pairs a path of this side's mount must not drive into each other,
+        where the simulator would make contacts between them: its moving links against
+        each other, and links and hand against its own hand and everything else (the
+        table, the objects, another arm). The hand's own pairs move as one."""
+        model = self.model
+        root = model.body(self.env.embodiment.sides[side].hand_root).id
+        body, links, top = model.body_parentid[root], [], root
+        while model.body_weldid[body]:
+            links += self._collidable(body)
+            top, body = body, model.body_parentid[body]
+        hand = [g for b in range(model.nbody) if self._in_subtree(b, root)
+                for g in self._collidable(b)]
+        moving = set(links + hand)
+        rest = [g for b in range(model.nbody) for g in self._collidable(b)
+                if g not in moving and not self._in_subtree(b, top)]
+        pairs = [(a, b) for i, a in enumerate(links) for b in links[i + 1:] + hand]
+        pairs += [(a, b) for a in links + hand for b in rest]
+        return tuple((a, b) for a, b in pairs if self._collide(a, b))
+
+    def _collidable(self, body: int) -> list[int]:
+        """A body's geoms that take part in collisions."""
+        model, first = self.model, self.model.body_geomadr[body]
+        return [g for g in range(first, first + model.body_geomnum[body])
+                if model.geom_contype[g] or model.geom_conaffinity[g]]
+
+    def _collide(self, geom: int, other: int) -> bool:
+        """Whether the simulator makes contacts between two geoms: their bit masks
+        match and MuJoCo's filters (one weld, a parent welded to its child, an
+        `exclude`) let the pair through."""
+        model = self.model
+        if not (model.geom_contype[geom] & model.geom_conaffinity[other]
+                or model.geom_contype[other] & model.geom_conaffinity[geom]):
+            return False
+        body = model.geom_bodyid[[geom, other]]
+        weld = model.body_weldid[body]
+        parents = model.body_weldid[model.body_parentid[weld]]
+        if weld[0] == weld[1] or parents[0] == weld[1] or parents[1] == weld[0]:
+            return False
+        excluded = set(model.exclude_signature.tolist())
+        return not {(int(body[0]) << 16) + int(body[1]),
+                    (int(body[1]) << 16) + int(body[0])} & excluded
+
+    def _in_subtree(self, body: int, root: int) -> bool:
+        """Whether `body` is `root` or below it."""
+        while body and body != root:
+            body = self.model.body_parentid[body]
+        return body == root
+
+    def _other_way_round(self, side: str, env: int, qadr: np.ndarray, qpos: np.ndarray,
+                         speed: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """`target` (the mount joints), or its equivalent with a stalled multi-turn joint
+        a full turn the other way, whichever is nearest the measured joints (`qpos`, the
+        env's whole qpos; `speed`, the mount joints' velocities) along a straight joint
+        path that drives no pair of `_path_pairs` into each other; `target` when none is
+        clear."""
+        ahead = target - qpos[qadr]
+        trailing = np.flatnonzero(self._turns[side] & (np.abs(ahead) > TURN_LAG)
+                                  & (speed * np.sign(ahead) < STALL_SPEED))
+        hold = self._hold[side]
+        hold[env] -= 1
+        if not len(trailing) or hold[env] > 0:
+            return target
+        chosen = self._clear_turn(side, qadr, qpos, target, ahead, trailing)
+        hold[env] = self._recheck if chosen is target else 0
+        return chosen
+
+    def _clear_turn(self, side: str, qadr: np.ndarray, qpos: np.ndarray, target: np.ndarray,
+                    ahead: np.ndarray, trailing: np.ndarray) -> np.ndarray:
+        """The nearest of `target` and its turns of one `trailing` joint the other way
+        whose path from the measured joints is clear; `target` when none is (one joint at
+        a time: the paths are checked one by one, and each costs)."""
+        data, model, pairs = self._scratch, self.model, self._pairs[side]
+        joint = [model.joint(j) for j in self._sides[side][1]]
+        options = [target]
+        for j in trailing:
+            turned = target.copy()
+            turned[j] -= 2 * np.pi * np.sign(ahead[j])
+            lo, hi = joint[j].range if joint[j].limited[0] else (-np.inf, np.inf)
+            if lo <= turned[j] <= hi:
+                options.append(turned)
+        if len(options) == 1:
+            return target
+        options.sort(key=lambda q: np.abs(q - qpos[qadr]).max())
+        for q in options:
+            data.qpos[:] = qpos
+            if not path_blocked(model, data, qadr, qpos[qadr], q, pairs):
+                return q
+        return target
+
     def pose(self, name: str) -> np.ndarray:
         """A named pose (every actuator's target) commands can blend towards."""
         return self._poses[name]
@@ -135,6 +249,8 @@ class ActionAdapter:
     def reset(self, env_ids: np.ndarray) -> None:
         """Forget warm starts of these envs (their robots are back at home)."""
         for side, (_, joints, _, _) in self._sides.items():
+            if side in self._hold:
+                self._hold[side][env_ids] = 0
             if side in self._solution:
                 qadr = [self.model.joint(j).qposadr[0] for j in joints]
                 qpos = self.env.sim.field("qpos").cpu().numpy()
@@ -144,13 +260,16 @@ class ActionAdapter:
         """(N, action_dim) joint targets realising `commands` (one per hand side)."""
         n = self.env.num_envs
         qpos = self.env.sim.field("qpos").cpu().numpy()
+        qvel = self.env.sim.field("qvel").cpu().numpy() if self._pairs else None
         out = np.repeat(self._poses["home"][None], n, axis=0)
         data, model = self._scratch, self.model
         for side, cmd in commands.items():
             site, joints, mount, hand = self._sides[side]
             qadr = np.array([model.joint(j).qposadr[0] for j in joints])
+            dadr = np.array([model.joint(j).dofadr[0] for j in joints])
             if side not in self._solution:
                 self._solution[side] = qpos[:, qadr].copy()
+                self._hold[side] = np.zeros(n, dtype=int)
             opened, closed = self._poses["open"][hand], self._poses[cmd.synergy][hand]
             c = np.clip(cmd.closure, 0.0, 1.0)[:, None]
             out[:, hand] = opened + c * (closed - opened)
@@ -163,6 +282,8 @@ class ActionAdapter:
                     data.qpos[held_adr] = out[i, held] / gear
                 q, _ = solve_site_pose(model, data, site, joints, cmd.pos[i], cmd.rot[i],
                                        iterations=IK_ITERATIONS, clearance=clearance)
+                if side in self._pairs:
+                    q = self._other_way_round(side, i, qadr, qpos[i], qvel[i, dadr], q)
                 self._solution[side][i] = q
             out[:, mount] = self._solution[side]
         return torch.as_tensor(out, device=self.env.device)
