@@ -10,6 +10,7 @@ from demonstration frames) is the remedy this measures beside it.
 
 from __future__ import annotations
 
+import inspect
 import json
 import pathlib
 
@@ -19,6 +20,7 @@ from omegaconf import DictConfig, OmegaConf
 from dexbench.cli.app import Command, register
 from dexbench.cli.config import ConfigError, default_embodiment, open_run_dir, write_atomic
 from dexbench.cli.rl import action_map, build_env, demo_dataset, demo_starts, episode_steps
+from dexbench.rl.rewards import holding, lift_when_grasping, lifted_body
 from dexbench.rl.vec_env import RslVecEnv
 
 
@@ -39,8 +41,9 @@ def explore_in(cfg: DictConfig, out: pathlib.Path) -> dict:
     vec = RslVecEnv(env, action_map(cfg, env), OmegaConf.to_container(cfg.rl.rewards),
                     int(cfg.rl.num_steps_per_env), episode_steps(cfg, env),
                     starts=demo_starts(cfg, env))
-    lift = dict(cfg.rl.rewards.lift_when_grasping)
-    name = env.task.lifted if lift.get("body", "auto") == "auto" else lift["body"]
+    lift = {k: v.default for k, v in inspect.signature(lift_when_grasping).parameters.items()
+            if k != "t"} | dict(cfg.rl.rewards.lift_when_grasping)
+    name = lifted_body(env, lift["body"])
     if name is None:
         raise ConfigError(f"{env.task.name} lifts nothing: no lift to count")
     gen = torch.Generator(device=vec.device).manual_seed(int(cfg.seed))
@@ -54,9 +57,8 @@ def explore_in(cfg: DictConfig, out: pathlib.Path) -> dict:
         action = std * torch.randn(n, vec.num_actions, generator=gen, device=vec.device)
         vec.step(action)
         height = env.task.lift(env.view, name).float()
-        forces = vec._obs["contact"].reshape(n, -1, 3).norm(dim=-1)
-        held = (forces > float(lift.get("force", 0.1))).sum(dim=1) >= int(lift.get("tips", 2))
-        held_lifted += (held & (height > float(lift.get("min_lift", 0.01)))).float()
+        held = holding(env, vec.groups, float(lift["force"]), int(lift["tips"]))
+        held_lifted += (held & (height > float(lift["min_lift"]))).float()
         ever_held |= held
         highest = torch.maximum(highest, height)
     if steps % int(cfg.rl.num_steps_per_env):

@@ -53,15 +53,25 @@ def action_rate(t: Transition) -> torch.Tensor:
     return (t.action - t.prev_action).square().sum(dim=1)
 
 
+def lifted_body(env: DexEnv, body: str = "auto") -> str | None:
+    """`body`, or with `auto` the object the task lifts (None if it lifts nothing)."""
+    return getattr(env.task, "lifted", None) if body == "auto" else body
+
+
+def holding(env: DexEnv, obs: dict[str, torch.Tensor], force: float, tips: int) -> torch.Tensor:
+    """(N,) whether at least `tips` fingertips push with `force` N or more (`contact`)."""
+    forces = obs["contact"].reshape(env.num_envs, -1, 3).norm(dim=-1)
+    return (forces > force).sum(dim=1) >= tips
+
+
 def lift_when_grasping(t: Transition, body: str = "auto", force: float = 0.1, tips: int = 2,
                        min_lift: float = 0.01) -> torch.Tensor | None:
     """1 where `body` (auto: the object the task lifts, if any) is `min_lift` m above its
     reset height and at least `tips` fingertips push on it with `force` N or more."""
-    name = getattr(t.env.task, "lifted", None) if body == "auto" else body
+    name = lifted_body(t.env, body)
     if name is None or "contact" not in t.obs:
         return None
-    forces = t.obs["contact"].reshape(t.env.num_envs, -1, 3).norm(dim=-1)
-    held = (forces > force).sum(dim=1) >= tips
+    held = holding(t.env, t.obs, force, tips)
     return (held & (t.env.task.lift(t.env.view, name) > min_lift)).float()
 
 

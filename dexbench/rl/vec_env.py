@@ -114,6 +114,11 @@ class RslVecEnv(VecEnv):
         return TensorDict({"actor": actor, "critic": critic}, batch_size=[self.num_envs],
                           device=self.device)
 
+    @property
+    def groups(self) -> dict[str, torch.Tensor]:
+        """The latest observation groups, by name (after the resets of the last step)."""
+        return self._obs
+
     def get_observations(self) -> TensorDict:
         return self._pack(self._obs)
 
