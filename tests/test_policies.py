@@ -10,9 +10,7 @@ import torch
 
 from dexbench.cli import train as train_cli
 from dexbench.cli.config import ConfigError
-from dexbench.data.collect import CollectSettings, collect
 from dexbench.data.meta import DatasetError
-from dexbench.experts import make_expert
 from dexbench.policies.common.checkpoint import (
     CheckpointError,
     load_checkpoint,
@@ -38,24 +36,13 @@ TINY = {
 
 
 @pytest.fixture(scope="module")
-def demos(tmp_path_factory) -> pathlib.Path:
-    """Three PickCube demonstrations by the scripted expert."""
-    env = make_env("PickCube", num_envs=3, seed=3, nthread=1)
-    root = tmp_path_factory.mktemp("demos") / "PickCube"
-    stats = collect(env, make_expert(env), root, CollectSettings(3, 9, post_success_steps=2),
-                    {}, progress=False)
-    assert stats["successes"] == 3
-    return root
-
-
-@pytest.fixture(scope="module")
-def trained(demos, tmp_path_factory) -> dict[str, pathlib.Path]:
+def trained(pickcube_demos, tmp_path_factory) -> dict[str, pathlib.Path]:
     """A run folder per policy kind, trained for a few steps with tiny networks."""
     root = tmp_path_factory.mktemp("runs")
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("DEXBENCH_RUNS_DIR", str(root))
         for kind in ("dp", "dp3"):
-            assert train_cli.main([f"policy={kind}", f"dataset={demos}", *COMMON,
+            assert train_cli.main([f"policy={kind}", f"dataset={pickcube_demos}", *COMMON,
                                    *TINY[kind]]) == 0
     return {kind: next(root.glob(f"train/PickCube/floating_shadow/{kind}/*"))
             for kind in ("dp", "dp3")}
@@ -117,8 +104,8 @@ def test_dp3_rendering_only_the_frames_it_reads_gives_the_same_actions(trained):
         torch.testing.assert_close(a, b, rtol=0, atol=0)
 
 
-def test_dp3_replays_point_clouds_once_beside_the_dataset(trained, demos):
-    replayed = demos.with_name(f"{demos.name}-pointcloud")
+def test_dp3_replays_point_clouds_once_beside_the_dataset(trained, pickcube_demos):
+    replayed = pickcube_demos.with_name(f"{pickcube_demos.name}-pointcloud")
     cloud = load_demos(replayed, ["pointcloud"]).obs["pointcloud"]
     assert cloud.shape[1:] == (64, 3) and np.isfinite(cloud).all()
     payload = load_checkpoint(trained["dp3"], "dp3")
@@ -217,8 +204,8 @@ def test_checkpoint_paths_resolve_to_best_then_last_then_newest_run(tmp_path):
         load_checkpoint(new, "dp")
 
 
-def test_demos_round_trip_through_a_compact_file(demos, tmp_path):
-    loaded = load_demos(demos, ["proprio", "state"])
+def test_demos_round_trip_through_a_compact_file(pickcube_demos, tmp_path):
+    loaded = load_demos(pickcube_demos, ["proprio", "state"])
     loaded.save(tmp_path / "demos.npz")
     back = Demos.load(tmp_path / "demos.npz")
     assert back.meta == loaded.meta and back.episode_ends.tolist() == \
@@ -227,16 +214,16 @@ def test_demos_round_trip_through_a_compact_file(demos, tmp_path):
     np.testing.assert_array_equal(back.actions, loaded.actions)
 
 
-def test_policy_groups_choose_the_inputs(demos, tmp_path, monkeypatch):
+def test_policy_groups_choose_the_inputs(pickcube_demos, tmp_path, monkeypatch):
     """`policy.groups` trains on some of the groups only (here without `policy`, the
     previous action); the checkpoint records them and acts on an env that has them all.
     A group the policy cannot use is one clear error."""
     monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
-    assert train_cli.main(["policy=dp", f"dataset={demos}", *COMMON, *TINY["dp"],
+    assert train_cli.main(["policy=dp", f"dataset={pickcube_demos}", *COMMON, *TINY["dp"],
                            "policy.groups=[proprio,state]"]) == 0
     run = next(tmp_path.glob("train/PickCube/floating_shadow/dp/*"))
     assert load_checkpoint(run, "dp")["groups"] == ["proprio", "state"]
     assert len(_rollout("dp", run, 3)) == 3
     with pytest.raises(ConfigError, match=r"\['pointcloud'\] not among this policy's inputs"):
-        train_cli.main(["policy=dp", f"dataset={demos}", *COMMON, *TINY["dp"],
+        train_cli.main(["policy=dp", f"dataset={pickcube_demos}", *COMMON, *TINY["dp"],
                         "policy.groups=[proprio,pointcloud]"])

@@ -9,8 +9,6 @@ import torch
 
 from dexbench.cli.config import ConfigError, load_config
 from dexbench.cli.rl import build_env, train
-from dexbench.data.collect import CollectSettings, collect
-from dexbench.experts import make_expert
 from dexbench.policies import rl as rl_policy
 from dexbench.rl.actions import ActionMap, delta_targets
 from dexbench.rl.demo_starts import DemoStarts
@@ -201,20 +199,9 @@ def test_sb3_smoke_run_and_its_policy_in_the_evaluator(tmp_path, monkeypatch, al
     assert (action >= env.action_low).all() and (action <= env.action_high).all()
 
 
-@pytest.fixture(scope="module")
-def pick_demos(tmp_path_factory):
-    """Two PickCube demonstrations by the scripted expert."""
-    env = make_env("PickCube", num_envs=2, seed=3, nthread=1)
-    root = tmp_path_factory.mktemp("demos") / "PickCube"
-    stats = collect(env, make_expert(env), root, CollectSettings(2, 6, post_success_steps=2),
-                    {}, progress=False)
-    assert stats["successes"] == 2
-    return root
-
-
-def test_demo_starts_restore_recorded_frames_and_stay_out_of_the_success_curve(vec, pick_demos):
+def test_demo_starts_restore_recorded_frames_and_stay_out_of_the_success_curve(vec, pickcube_demos):
     env = vec.env
-    starts = DemoStarts.from_dataset(pick_demos, env, fraction=1.0, seed=0)
+    starts = DemoStarts.from_dataset(pickcube_demos, env, fraction=1.0, seed=0)
     short = RslVecEnv(env, vec.action_map, _DEFAULT, steps_per_iteration=1, episode_steps=1,
                       starts=starts)
     zero = torch.zeros(3, short.num_actions)
@@ -230,27 +217,27 @@ def test_demo_starts_restore_recorded_frames_and_stay_out_of_the_success_curve(v
     assert torch.isfinite(obs["actor"]).all()
     short.step(zero)  # episodes that began at a demonstration frame are not counted
     assert short.curve.points[-1]["episodes"] == 0
-    none = DemoStarts.from_dataset(pick_demos, env, fraction=0.0, seed=0)
+    none = DemoStarts.from_dataset(pickcube_demos, env, fraction=0.0, seed=0)
     _, moved = none.start(env, torch.arange(3), env.reset())
     assert len(moved) == 0
 
 
-def test_demo_starts_refuse_another_task_and_a_bad_share(pick_demos, tmp_path, monkeypatch):
+def test_demo_starts_refuse_another_task_and_a_bad_share(pickcube_demos, tmp_path, monkeypatch):
     other = make_env("StackCube", num_envs=1, nthread=1)
     with pytest.raises(ValueError, match=r"collect\.py task=StackCube"):
-        DemoStarts.from_dataset(pick_demos, other, fraction=0.5, seed=0)
+        DemoStarts.from_dataset(pickcube_demos, other, fraction=0.5, seed=0)
     monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
     common = ["sim.backend=cpu", "num_envs=2", "sim.nthread=1", "rl.max_iterations=1"]
     with pytest.raises(ConfigError, match=r"collect\.py task=PickCube"):
         train([*common, "rl.demo_starts.dataset=auto"])
     with pytest.raises(ConfigError, match=r"\[0, 1\]"):
-        train([*common, f"rl.demo_starts.dataset={pick_demos}", "rl.demo_starts.fraction=2"])
+        train([*common, f"rl.demo_starts.dataset={pickcube_demos}", "rl.demo_starts.fraction=2"])
 
 
-def test_ppo_smoke_run_with_demo_starts(pick_demos, tmp_path, monkeypatch):
+def test_ppo_smoke_run_with_demo_starts(pickcube_demos, tmp_path, monkeypatch):
     monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path))
     result = train(["sim.backend=cpu", "num_envs=4", "sim.nthread=1", "rl.max_iterations=2",
                     "rl.chunk=1", "rl.network.hidden_dims=[32,32]", "rl.episode_seconds=0.1",
-                    f"rl.demo_starts.dataset={pick_demos}", "rl.demo_starts.fraction=0.5"])
+                    f"rl.demo_starts.dataset={pickcube_demos}", "rl.demo_starts.fraction=0.5"])
     assert result["iterations"] == 2
 
