@@ -9,7 +9,12 @@ bottom, so it pushes the ball from low behind: higher, the push presses the ball
 the slope and bends the finger's weak joints back. A ball moves along the line from the
 contact through its centre, so every step the fingertip is put behind the ball on the
 line to a point a little further along the path and pressed on; the line starts from
-where the ball will be shortly (steering on where it is overshoots and weaves). When
+where the ball will be shortly (steering on where it is overshoots and weaves). The
+push starts only once the fingertip itself has caught up with its command behind the
+ball: an arm trails the fast descent by ~3 cm, as far as a fingertip stuck on a post
+trails its push, and a push begun that early read as stuck at once, over and over. The
+fingertip's steady offset from its command across the push (an arm's, ~5 mm) is taken
+out of the command: it turns the line, and the ball weaves off it onto a post. When
 the fingertip has lost the ball (it rolled aside) or is stuck, the hand goes back
 behind it from above; once `done`, the hand rises.
 """
@@ -57,6 +62,9 @@ ARRIVED = 0.006  # m
 LOST = 0.045  # m: the fingertip this far from the ball's back has lost it ...
 PASSED = 0.01  # m: ... as when it is this far ahead of the ball's centre
 BLOCKED = 0.03  # m the fingertip trails its command: stuck (on a post, a rail): go round
+# m: the push starts only once the fingertip itself trails its command by less: an arm
+# trails the fast descent by ~3 cm (a floating wrist by ~1.5), which would read as blocked
+SETTLED = 0.01
 LEAN = 0.45  # rad the pointing finger leans forward from vertical
 POINT = "point"  # the adapter pose: index and thumb open, the other fingers curled
 
@@ -160,7 +168,8 @@ class PathPushExpert:
         passed = (rel * d).sum(1) < -PASSED
         done = np.asarray(self.plan.done(self.env), dtype=bool)
         phase = self.phase
-        blocked = np.linalg.norm(self.pos - tip, axis=1) > BLOCKED
+        lag = np.linalg.norm(self.pos - tip, axis=1)
+        blocked = lag > BLOCKED
         phase[(phase == Phase.PUSH) & ((gap > back + LOST) | passed | blocked)] = Phase.ABOVE
         phase[done] = Phase.DONE
         phase[(phase == Phase.DONE) & ~done] = Phase.ABOVE
@@ -168,7 +177,11 @@ class PathPushExpert:
         above = phase == Phase.ABOVE
         target[above, 2] = (ball[:, 2] + self.radius + self.reach + HIGH)[above]
         push = phase == Phase.PUSH
-        target[push] = (behind + (STANDOFF + PRESS) * d)[push]
+        # The fingertip's offset from its command across the push turns the ball's line.
+        drift = tip - self.pos
+        drift[:, 2] = 0.0
+        drift -= (drift * d).sum(1, keepdims=True) * d
+        target[push] = (behind + (STANDOFF + PRESS) * d - drift)[push]
         fin = phase == Phase.DONE
         target[fin] = self.pos[fin] + [0.0, 0.0, HIGH]
         target[fin, 2] = np.minimum(target[fin, 2], ball[fin, 2] + HIGH)
@@ -177,7 +190,7 @@ class PathPushExpert:
                                           TURN_RATE * self.env.control_dt)
         arrived = np.linalg.norm(self.pos - target, axis=1) < ARRIVED
         phase[above & arrived] = Phase.DOWN
-        phase[(phase == Phase.DOWN) & arrived & ~above] = Phase.PUSH
+        phase[(phase == Phase.DOWN) & arrived & (lag < SETTLED) & ~above] = Phase.PUSH
         palm_cmd = self.pos - np.einsum("nij,nj->ni", self.rot, self.offsets[rows, self.lead])
         closure = np.ones(len(ball))
         return self.adapter.actions({self.side: HandCommand(palm_cmd, self.rot, closure, POINT)})
