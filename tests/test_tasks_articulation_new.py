@@ -1,11 +1,13 @@
 """The "fixate" hold-and-actuate tasks (folder, stapler, utility knife, scissors): a state
 that satisfies each paper condition and, for every clause, a near miss that does not."""
 
+import mujoco
 import pytest
 import torch
 from test_tasks import _fresh
 
 from dexbench.experts import make_expert
+from dexbench.sim.backend import INTEGRATION
 from dexbench.tasks.registry import make_env
 
 
@@ -80,3 +82,26 @@ def test_hold_actuate_expert_pins_one_ring_and_pushes_the_other():
             break
     assert solved.all()
     assert expert.holder.pressing.all(), "the left hand holds ring 1 down"
+
+
+def test_knife_arms_keep_their_wrists_apart():
+    """On arms the waiting hand's wrist met the pusher's over the knife, and the released
+    pusher, hovering there, met the other arm reaching in to pinch (docs/embodiments.md)."""
+    env = make_env("SlideUtilityKnife", "bimanual_fr3_sharpa", num_envs=1, seed=1000, nthread=1)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(1))
+    model = env.scene.model
+    data = mujoco.MjData(model)
+    side = [model.body(model.geom_bodyid[g]).name.split("/")[0] for g in range(model.ngeom)]
+    touching = []
+    for step in range(260):  # the push, the release and the pinch's descent
+        env.step(expert.act())
+        if step % 5 == 0:
+            mujoco.mj_setState(model, data, env.sim.get_state(INTEGRATION)[0].numpy(),
+                               INTEGRATION)
+            mujoco.mj_forward(model, data)
+            touching += [step for c in data.contact[:data.ncon]
+                         if {side[c.geom1], side[c.geom2]} == {"left", "right"}]
+    assert expert.started.all(), "the left hand runs its pinch"
+    assert not touching, f"the arms touch at steps {sorted(set(touching))}"

@@ -10,8 +10,10 @@ back and levels the hand (a hanging hand is near the floating wrist's gimbal loc
 for whatever step comes next). Without a hold plan the other hand moves out of the way
 (outwards and up), or, with a `then` plan (picking the object up once its part has
 moved), waits outwards of and above that plan's point and runs it once the joint is
-done and a releasing pusher has backed off. Contact points are measured on the hands (mean finger
-tips), so the script serves every hand and mount.
+done and a releasing pusher has backed off; that pusher then goes on outwards and up, out
+of the way of the other arm reaching in (on arms the two wrists and forearms otherwise
+meet over the object). Contact points are measured on the hands (mean finger tips), so
+the script serves every hand and mount.
 """
 
 from __future__ import annotations
@@ -43,7 +45,9 @@ BESIDE = 0.025  # m the pads start from the point: behind it, or out along the a
 ARRIVED = 0.01  # m
 HELD = 0.02  # m from the holding point to the holding hand's mean finger tip: it holds
 ASIDE = 0.12  # m an idle other hand moves outwards and up, out of the pusher's way
-WAIT_OUT, WAIT_UP = 0.16, 0.12  # m outwards of and above its point the `then` hand waits
+# m outwards of and above its point the `then` hand waits (its wrist clear of the pusher's)
+WAIT_OUT, WAIT_UP = 0.22, 0.12
+CLEAR_OUT, CLEAR_UP = 0.15, 0.3  # m a released pusher then moves outwards and up
 UP = np.array([0.0, 0.0, 1.0])
 LEVEL = 1e-3  # trace(R1^T R2) this close to 3: the hand has turned level
 
@@ -83,6 +87,7 @@ class HoldActuateExpert:
         self.away = np.zeros(n, dtype=bool)  # released: back at the hover point
         self.started = np.zeros(n, dtype=bool)  # the other hand runs `then`
         self.aside = (np.zeros((n, 3)), eye.copy())  # where an idle other hand waits
+        self.clear = np.zeros((n, 3))  # the released pusher's move aside; risen: its goal
         if self.other is not None:
             self._other_palm = model.site(env.embodiment.sides[self.other].palm_site).id
 
@@ -102,6 +107,7 @@ class HoldActuateExpert:
             if self.after is not None:  # nearer: outwards of and above where it starts
                 then = self.env.view.point_pos(*self._then_at).cpu().numpy()
                 self.aside[0][ids] = then[ids] + WAIT_OUT * out + WAIT_UP * UP
+                self.clear[ids] = CLEAR_UP * UP - CLEAR_OUT * out
 
     def _held(self) -> np.ndarray:
         """(N,) the holding hand's finger tips are on its point (always, without one)."""
@@ -161,6 +167,9 @@ class HoldActuateExpert:
             self.away |= up
             self.level[up] = heading[up]
             rot[self.away] = self.level[self.away]
+            if self.after is not None:
+                self.clear[up] += self.pos[up]
+                target[self.away] = self.clear[self.away]
         else:
             target[done] = self.pos[done]
         pushing = (self.stage >= 2) & (self.stage < 4)
