@@ -15,13 +15,12 @@ import json
 import pathlib
 
 import torch
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 
 from dexbench.cli.app import Command, register
 from dexbench.cli.config import ConfigError, default_embodiment, open_run_dir, write_atomic
-from dexbench.cli.rl import action_map, build_env, demo_dataset, demo_starts, episode_steps
+from dexbench.cli.rl import build_env, build_vec_env, demo_dataset
 from dexbench.rl.rewards import holding, lift_when_grasping, lifted_body
-from dexbench.rl.vec_env import RslVecEnv
 
 
 def check(cfg: DictConfig, overrides: list[str]) -> None:
@@ -38,9 +37,7 @@ def explore_in(cfg: DictConfig, out: pathlib.Path) -> dict:
     the highest lift, and success of the episodes that began at the task's reset."""
     torch.manual_seed(int(cfg.seed))
     env = build_env(cfg)
-    vec = RslVecEnv(env, action_map(cfg, env), OmegaConf.to_container(cfg.rl.rewards),
-                    int(cfg.rl.num_steps_per_env), episode_steps(cfg, env),
-                    starts=demo_starts(cfg, env))
+    vec = build_vec_env(cfg, env)
     lift = {k: v.default for k, v in inspect.signature(lift_when_grasping).parameters.items()
             if k != "t"} | dict(cfg.rl.rewards.lift_when_grasping)
     name = lifted_body(env, lift["body"])

@@ -20,7 +20,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from dexbench import experts
 from dexbench.cli.app import Command, hydra_main, register
-from dexbench.cli.config import ConfigError, env_kwargs, open_run_dir, runs_root
+from dexbench.cli.config import ConfigError, dataset_path, env_kwargs, open_run_dir
 from dexbench.data.collect import CollectSettings, Staging, collect
 from dexbench.data.files import write_json
 from dexbench.embodiments.builder import other_hands as same_mount_hands
@@ -39,7 +39,7 @@ class NoExpertError(ConfigError):
 def dataset_dir(cfg: DictConfig, task: str, embodiment: str) -> pathlib.Path:
     if cfg.out:
         return pathlib.Path(cfg.out)
-    return runs_root() / "datasets" / task / embodiment / (cfg.name or f"seed{cfg.seed}")
+    return dataset_path(task, embodiment, cfg.name or f"seed{cfg.seed}")
 
 
 def collect_settings(cfg: DictConfig) -> CollectSettings:

@@ -152,6 +152,12 @@ def runs_root() -> pathlib.Path:
     return pathlib.Path(os.environ.get("DEXBENCH_RUNS_DIR", "runs"))
 
 
+def dataset_path(task: str, embodiment: str, name: str) -> pathlib.Path:
+    """`runs/datasets/<task>/<embodiment>/<name>`: where `collect.py` writes a dataset and
+    `train.py` and `rl.py` look for one by default."""
+    return runs_root() / "datasets" / task / embodiment / name
+
+
 def open_run_dir(path: pathlib.Path, cfg: DictConfig) -> pathlib.Path:
     """The run folder Hydra made (or, called without Hydra, make it) with the resolved
     config and the command line."""

@@ -31,11 +31,11 @@ from tqdm import tqdm
 from dexbench.cli.app import Command, hydra_main, register, stamp
 from dexbench.cli.config import (
     ConfigError,
+    dataset_path,
     default_embodiment,
     env_kwargs,
     load_config,
     open_run_dir,
-    runs_root,
     write_atomic,
 )
 from dexbench.cli.rl_sb3 import record_curve, train_sb3
@@ -99,7 +99,7 @@ def demo_dataset(cfg: DictConfig) -> pathlib.Path | None:
     if name is None:
         return None
     embodiment = default_embodiment(cfg)
-    path = (runs_root() / "datasets" / cfg.task / embodiment / "seed0" if name == "auto"
+    path = (dataset_path(cfg.task, embodiment, "seed0") if name == "auto"
             else pathlib.Path(str(name)))
     if not path.is_dir():
         raise ConfigError(f"rl.demo_starts.dataset: no demonstrations at {path}; collect them "
@@ -117,6 +117,16 @@ def demo_starts(cfg: DictConfig, env: DexEnv) -> DemoStarts | None:
                                        int(cfg.seed))
     except ValueError as err:
         raise ConfigError(f"rl.demo_starts: {err}") from None
+
+
+def build_vec_env(cfg: DictConfig, env: DexEnv) -> RslVecEnv:
+    """The training env as PPO and the SB3 algorithms (and `bench.py explore`) see it:
+    `rl.*` actions, reward terms, episode length and demonstration starts."""
+    rl = cfg.rl
+    return RslVecEnv(env, action_map(cfg, env), OmegaConf.to_container(rl.rewards),
+                     int(rl.num_steps_per_env), episode_steps(cfg, env),
+                     cfg=OmegaConf.to_container(cfg, resolve=True),
+                     starts=demo_starts(cfg, env))
 
 
 def _meta(cfg: DictConfig, env: DexEnv, vec: RslVecEnv) -> dict:
@@ -171,10 +181,7 @@ def train_in(cfg: DictConfig, out: pathlib.Path) -> dict:
     torch.manual_seed(int(cfg.seed))
     env = build_env(cfg)
     run_dir = open_run_dir(out, cfg)
-    vec = RslVecEnv(env, action_map(cfg, env), OmegaConf.to_container(rl.rewards),
-                    int(rl.num_steps_per_env), episode_steps(cfg, env),
-                    cfg=OmegaConf.to_container(cfg, resolve=True),
-                    starts=demo_starts(cfg, env))
+    vec = build_vec_env(cfg, env)
     write_atomic(run_dir / META_FILE, json.dumps(_meta(cfg, env, vec), indent=2) + "\n")
     wandb_run = start_wandb(run_dir, OmegaConf.to_container(cfg, resolve=True),
                             OmegaConf.to_container(cfg.wandb), "rl")

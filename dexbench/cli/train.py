@@ -26,11 +26,11 @@ from omegaconf import DictConfig, OmegaConf
 from dexbench.cli.app import Command, hydra_main, register
 from dexbench.cli.config import (
     ConfigError,
+    dataset_path,
     default_embodiment,
     env_kwargs,
     job_device,
     open_run_dir,
-    runs_root,
 )
 from dexbench.data.files import write_json
 from dexbench.data.meta import DatasetError, read_meta
@@ -59,7 +59,7 @@ def source_dataset(cfg: DictConfig) -> pathlib.Path:
             raise DatasetError(f"dataset={path} does not exist")
         return path
     embodiment = cfg.embodiment or task_class(cfg.task).default_embodiment
-    path = runs_root() / "datasets" / cfg.task / embodiment / cfg.dataset_name
+    path = dataset_path(cfg.task, embodiment, cfg.dataset_name)
     if not path.exists():
         raise DatasetError(
             f"no demonstrations at {path}; collect them first with `python collect.py "
