@@ -218,7 +218,7 @@ def test_demo_starts_restore_recorded_frames_and_stay_out_of_the_success_curve(v
     short.step(zero)  # episodes that began at a demonstration frame are not counted
     assert short.curve.points[-1]["episodes"] == 0
     none = DemoStarts.from_dataset(pickcube_demos, env, fraction=0.0, seed=0)
-    _, moved = none.start(env, torch.arange(3), env.reset())
+    moved = none.choose(torch.arange(3))
     assert len(moved) == 0
 
 

@@ -62,17 +62,19 @@ class DemoStarts:
     def num_frames(self) -> int:
         return len(self.states)
 
-    def start(self, env: DexEnv, ids: torch.Tensor, obs: Obs) -> tuple[Obs, torch.Tensor]:
-        """Move a `fraction` share of the just-reset envs `ids` to random demonstration
-        frames; return all envs' observations and the envs moved."""
+    def choose(self, ids: torch.Tensor) -> torch.Tensor:
+        """The `fraction` share of the envs `ids` (due for a reset) to start from
+        demonstration frames, drawn anew each call."""
         ids = ids.cpu()
-        chosen = ids[torch.from_numpy(self._rng.random(len(ids)) < self.fraction)]
-        if len(chosen) == 0:
-            return obs, chosen
-        frames = self._rng.integers(self.num_frames, size=len(chosen))
-        obs = env.reset_to(chosen, self.keys[self.episode[frames]])
-        restored = env.restore(chosen, self.states[frames], self.before[frames])
-        dev = chosen.to(env.device)
+        return ids[torch.from_numpy(self._rng.random(len(ids)) < self.fraction)]
+
+    def start(self, env: DexEnv, ids: torch.Tensor) -> Obs:
+        """Reset the envs `ids` into random demonstration frames (their episodes' resets,
+        then the frames' states); return all envs' observations."""
+        frames = self._rng.integers(self.num_frames, size=len(ids))
+        obs = env.reset_to(ids, self.keys[self.episode[frames]])
+        restored = env.restore(ids, self.states[frames], self.before[frames])
+        dev = ids.to(env.device)
         for group, value in restored.items():
             obs[group][dev] = value
-        return obs, chosen
+        return obs

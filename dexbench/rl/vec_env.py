@@ -137,13 +137,14 @@ class RslVecEnv(VecEnv):
         final = None
         if len(ids):
             final = self._pack(obs)["actor"][ids]  # what bootstrapping a time-out needs
-            obs = env.reset(ids)
             self._prev_action[ids] = 0.0
             self._solved[ids] = False
             self._from_demo[ids] = False
-            if self.starts is not None:
-                obs, moved = self.starts.start(env, ids, obs)
-                self._from_demo[moved.to(self.device)] = True
+            moved = ids[:0] if self.starts is None else self.starts.choose(ids).to(self.device)
+            self._from_demo[moved] = True
+            obs = env.reset(ids[~self._from_demo[ids]])  # each env reset once, either way
+            if len(moved):
+                obs = self.starts.start(env, moved)
         self._obs = obs
         self._total_steps += 1
         if self._total_steps % self._steps_per_iteration == 0:
