@@ -26,6 +26,15 @@ TURN_LAG, STALL_SPEED = 0.5, 0.1
 RECHECK_SECONDS = 0.5  # a stall where neither way is clear is checked again this late
 
 
+def subtree(model: mujoco.MjModel, root: int) -> set[int]:
+    """The ids of body `root` and of every body below it."""
+    out = {root}
+    for body in range(root + 1, model.nbody):
+        if model.body_parentid[body] in out:
+            out.add(body)
+    return out
+
+
 @dataclass
 class HandCommand:
     """What one hand should do in every env: palm site pose and finger closure.
@@ -138,14 +147,19 @@ class ActionAdapter:
             table = model.geom("table_top").id
         except KeyError:
             return None
-        layout = self.env.embodiment.sides[side]
-        body, moving = model.body_parentid[model.body(layout.hand_root).id], []
-        while model.body_weldid[body]:
-            first = model.body_geomadr[body]
-            moving += [g for g in range(first, first + model.body_geomnum[body])
-                       if model.geom_contype[g] or model.geom_conaffinity[g]]
-            body = model.body_parentid[body]
+        moving, _ = self._arm_links(side)
         return Clearance(tuple((g, table) for g in moving), TABLE_CLEARANCE)
+
+    def _arm_links(self, side: str) -> tuple[list[int], int]:
+        """A side's moving arm link geoms (those that collide, from the hand's root up to
+        the fixed base) and the topmost moving body."""
+        model = self.model
+        top = model.body(self.env.embodiment.sides[side].hand_root).id
+        body, links = model.body_parentid[top], []
+        while model.body_weldid[body]:
+            links += self._collidable(body)
+            top, body = body, model.body_parentid[body]
+        return links, top
 
     def _path_pairs(self, side: str) -> tuple[tuple[int, int], ...]:
         """The geom pairs a path of this side's mount must not drive into each other,
@@ -153,16 +167,12 @@ class ActionAdapter:
         each other, and links and hand against its own hand and everything else (the
         table, the objects, another arm). The hand's own pairs move as one."""
         model = self.model
-        root = model.body(self.env.embodiment.sides[side].hand_root).id
-        body, links, top = model.body_parentid[root], [], root
-        while model.body_weldid[body]:
-            links += self._collidable(body)
-            top, body = body, model.body_parentid[body]
-        hand = [g for b in range(model.nbody) if self._in_subtree(b, root)
-                for g in self._collidable(b)]
-        moving = set(links + hand)
-        rest = [g for b in range(model.nbody) for g in self._collidable(b)
-                if g not in moving and not self._in_subtree(b, top)]
+        links, top = self._arm_links(side)
+        hand_bodies = subtree(model, model.body(self.env.embodiment.sides[side].hand_root).id)
+        hand = [g for b in sorted(hand_bodies) for g in self._collidable(b)]
+        moving, mount = set(links + hand), subtree(model, top)
+        rest = [g for b in range(model.nbody) if b not in mount for g in self._collidable(b)
+                if g not in moving]
         pairs = [(a, b) for i, a in enumerate(links) for b in links[i + 1:] + hand]
         pairs += [(a, b) for a in links + hand for b in rest]
         return tuple((a, b) for a, b in pairs if self._collide(a, b))
@@ -189,12 +199,6 @@ class ActionAdapter:
         excluded = set(model.exclude_signature.tolist())
         return not {(int(body[0]) << 16) + int(body[1]),
                     (int(body[1]) << 16) + int(body[0])} & excluded
-
-    def _in_subtree(self, body: int, root: int) -> bool:
-        """Whether `body` is `root` or below it."""
-        while body and body != root:
-            body = self.model.body_parentid[body]
-        return body == root
 
     def _other_way_round(self, side: str, env: int, qadr: np.ndarray, qpos: np.ndarray,
                          speed: np.ndarray, target: np.ndarray) -> np.ndarray:

@@ -18,7 +18,7 @@ import torch
 from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
 from dexbench.envs.rotations import quat_apply
-from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
+from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose, subtree
 from dexbench.experts.base import host_ids, phase_machine_state
 from dexbench.experts.motion import (
     HANDSHAKE_ROT,
@@ -73,15 +73,6 @@ def squeezed(adapter: ActionAdapter, env: DexEnv, synergy: str, factor: float) -
     return name
 
 
-def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
-    """The ids of body `root` and of every body below it."""
-    out = {root}
-    for body in range(root + 1, model.nbody):
-        if model.body_parentid[body] in out:
-            out.add(body)
-    return out
-
-
 def stand_off(expert: GraspExpert, distance: float, reach: float = 0.04) -> float:
     """How far (m) `expert`'s grasp pose must move back along the palm normal (negative:
     in) for the open hand there to stand `distance` clear of the object (negative: pressed
@@ -117,7 +108,7 @@ def stand_off(expert: GraspExpert, distance: float, reach: float = 0.04) -> floa
                        np.repeat(data.xquat[body][None], n, axis=0))
     grasp_pos, grasp_rot = expert.grasp_pos[0], expert.grasp_rot[0]
     colliding = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
-    held = _subtree(model, model.body(info.root).id)
+    held = subtree(model, model.body(info.root).id)
     hand = [g for g in env.scene.hand_geoms
             if model.body(model.geom_bodyid[g]).name.startswith(f"{side}/hand/")]
     pairs = [(a, b) for a in hand
