@@ -149,18 +149,23 @@ def thumb_actuators(model: mujoco.MjModel, palm: int, thumb_tip: int) -> np.ndar
         body = model.body_parentid[body]
     out = np.zeros(model.nu, dtype=bool)
     for a in range(model.nu):
-        target = model.actuator_trnid[a, 0]
-        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
-            joints = [target]
-        elif model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON:
-            first = model.tendon_adr[target]
-            wraps = range(first, first + model.tendon_num[target])
-            joints = [model.wrap_objid[w] for w in wraps
-                      if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT]
-        else:
-            joints = []
-        out[a] = any(model.jnt_bodyid[j] in chain for j in joints)
+        out[a] = any(model.jnt_bodyid[j] in chain for j, _ in actuated_joints(model, a))
     return out
+
+
+def actuated_joints(model: mujoco.MjModel, actuator: int) -> list[tuple[int, float]]:
+    """(joint id, coefficient) of each joint an actuator drives: its joint (1.0), or the
+    joints of its fixed tendon with their coefficients (coupled finger joints); none for
+    other transmissions."""
+    target = model.actuator_trnid[actuator, 0]
+    if model.actuator_trntype[actuator] == mujoco.mjtTrn.mjTRN_JOINT:
+        return [(int(target), 1.0)]
+    if model.actuator_trntype[actuator] != mujoco.mjtTrn.mjTRN_TENDON:
+        return []
+    first = model.tendon_adr[target]
+    return [(int(model.wrap_objid[w]), float(model.wrap_prm[w]))
+            for w in range(first, first + model.tendon_num[target])
+            if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT]
 
 
 def _knuckle(model: mujoco.MjModel, body: int, palm: int) -> int:

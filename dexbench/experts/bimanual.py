@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 import torch
 
+from dexbench.embodiments.hand_geometry import actuated_joints
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids
@@ -148,14 +149,10 @@ class TwoHandLiftExpert:
         joints = []  # (action index, qpos addresses, their share of the target)
         for i in emb.hand_actuators(side):
             act = model.actuator(emb.actuators[i])
-            if act.trntype[0] == mujoco.mjtTrn.mjTRN_JOINT:
-                joints.append((i, [model.jnt_qposadr[act.trnid[0]]], 1.0 / act.gear[0]))
-            elif act.trntype[0] == mujoco.mjtTrn.mjTRN_TENDON:  # coupled joints share it
-                first = model.tendon_adr[act.trnid[0]]
-                wraps = range(first, first + model.tendon_num[act.trnid[0]])
-                coef = sum(model.wrap_prm[w] for w in wraps)
-                joints.append((i, [model.jnt_qposadr[model.wrap_objid[w]] for w in wraps],
-                               1.0 / (act.gear[0] * coef)))
+            driven = actuated_joints(model, act.id)  # coupled joints share a tendon's
+            if driven:
+                joints.append((i, [model.jnt_qposadr[j] for j, _ in driven],
+                               1.0 / (act.gear[0] * sum(c for _, c in driven))))
         palm, tip_sites = self._palm_site[side], self._tip_sites[side][1:]
         best = (-np.inf, 1.0, np.zeros(3))
         for closure in np.linspace(0.0, 1.0, 21):
