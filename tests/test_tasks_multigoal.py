@@ -13,7 +13,7 @@ import torch
 import yaml
 from test_tasks import _forward, _place_point, _set_joint, _set_pose
 
-from dexbench.experts.grasp import _subtree
+from dexbench.experts.adapter import subtree
 from dexbench.tasks.multigoal import ADDONS, PRIMARIES, VARIANTS
 from dexbench.tasks.registry import TASKS, make_env
 
@@ -52,7 +52,7 @@ def _swept_boxes(env, obj: str, steps: int = 9) -> list[tuple[np.ndarray, np.nda
     boxes = []
     for joint in info.joints:
         j = model.joint(joint)
-        bodies = _subtree(model, j.bodyid[0])
+        bodies = subtree(model, j.bodyid[0])
         geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] in bodies]
         start = data.qpos[j.qposadr[0]]
         for q in np.linspace(*j.range, steps):
