@@ -1,7 +1,7 @@
-"""`python -m dexbench list|inspect|docs|snapshot|validate|merge|split|cloud ...`.
+"""`python -m dexbench list|inspect|docs|snapshot|validate|merge|curves|split|cloud ...`.
 
 `inspect`, `snapshot` and `validate` are Hydra mains (`--help`, `--cfg job`, ...) picked by
-the verb; `list`, `docs`, `merge` and `split` take plain arguments.
+the verb; `list`, `docs`, `merge`, `curves` and `split` take plain arguments.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from omegaconf import DictConfig
 from dexbench.cli.app import Command, dispatch, register
 from dexbench.cli.cloud import CLOUD
 from dexbench.cli.config import env_kwargs, load_config
+from dexbench.cli.curves import curves
 from dexbench.cli.docs import write_docs
 from dexbench.cli.errors import run_cli
 from dexbench.cli.matrix import MATRIX
@@ -37,6 +38,7 @@ USAGE = """usage:
   python -m dexbench cloud task=<Task> embodiment=<embodiment> [seed=0] out=<file>.ply [view=true]
   python -m dexbench cloud dataset=<folder with point clouds> episode=0 frame=10 out=<file>.ply
   python -m dexbench merge <eval run or sweep folder> ... [out=<folder>]
+  python -m dexbench curves <rl run>[:<eval run>] ... [out=<png>]   (runs' curves on one plot)
   python -m dexbench split <split>   (its implemented tasks, comma-separated, for -m split_task=)
   python -m dexbench matrix split=<split> episodes=20 jobs=<N>   (the expert on every cell)
   python -m dexbench transfer tasks=[PickCube,...] episodes=10   (expert motion -> other hands)"""
@@ -118,6 +120,8 @@ def main(argv: list[str]) -> int:
         print(f"wrote {write_docs()}")
     elif argv[:1] == ["merge"]:
         return merge(argv[1:])
+    elif argv[:1] == ["curves"]:
+        return curves(argv[1:])
     elif len(argv) == 2 and argv[0] == "split":
         print(",".join(split_tasks(argv[1])))
     else:
