@@ -105,3 +105,20 @@ def test_knife_arms_keep_their_wrists_apart():
                          if {side[c.geom1], side[c.geom2]} == {"left", "right"}]
     assert expert.started.all(), "the left hand runs its pinch"
     assert not touching, f"the arms touch at steps {sorted(set(touching))}"
+
+
+def test_stapler_pusher_starts_when_the_holding_wrist_meets_the_table():
+    """On arms Shadow's holding forearm meets the table first and rests its finger tips
+    ~2.5 cm over the hinge block: the pusher waited on them for the whole episode."""
+    env = make_env("OpenStapler", "bimanual_fr3_shadow", num_envs=1, seed=0, nthread=1)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(1))
+    solved = torch.zeros(1, dtype=torch.bool)
+    for _ in range(300):  # the expert needs ~220 of the 480 steps
+        _, _, terminated, _, _ = env.step(expert.act())
+        solved |= terminated
+        if solved.all():
+            break
+    assert expert.stage[0] > 0, "the pusher goes in once the holder has come to rest"
+    assert solved.all()

@@ -2,7 +2,7 @@
 
 For free articulated objects (a folder's flap, a stapler's arm, a knife's blade slider,
 a scissor ring). The other hand runs its own plan (typically a press pinning the object
-to the table); once its finger tips are on their point, the pushing hand comes in beside
+to the table); once its finger tips are over their point, the pushing hand comes in beside
 the driven point, on the side it pushes from, and keeps its finger pads a little ahead
 of the point along the joint's motion (the arc about a hinge, the line of a slide) until
 the joint has covered the plan's `done` fraction. There it stays, or, releasing, rises
@@ -43,7 +43,12 @@ HOVER = 0.08  # m back along the approach before going in beside the point
 LEAD = 0.03  # m the pads aim ahead of the point
 BESIDE = 0.025  # m the pads start from the point: behind it, or out along the approach
 ARRIVED = 0.01  # m
-HELD = 0.02  # m from the holding point to the holding hand's mean finger tip: it holds
+HELD = 0.02  # m across from the holding point to the holding hand's mean finger tip
+# m above its point the holding hand's mean finger tip may rest, over it, and hold: a hand
+# whose wrist meets the table first (Shadow's forearm, pressing the stapler's hinge block)
+# stops there, and would otherwise keep the pusher waiting; one coming down from its hover
+# point (`press.HOVER`, 8 cm) is on it before the pusher is
+RESTS_ABOVE = 0.035
 ASIDE = 0.12  # m an idle other hand moves outwards and up, out of the pusher's way
 # m outwards of and above its point the `then` hand waits (its wrist clear of the pusher's)
 WAIT_OUT, WAIT_UP = 0.22, 0.12
@@ -110,12 +115,13 @@ class HoldActuateExpert:
                 self.clear[ids] = CLEAR_UP * UP - CLEAR_OUT * out
 
     def _held(self) -> np.ndarray:
-        """(N,) the holding hand's finger tips are on its point (always, without one)."""
+        """(N,) the holding hand's finger tips are over its point, at most `RESTS_ABOVE`
+        above it (always, without one)."""
         if self.holder is None:
             return np.ones(self.env.num_envs, dtype=bool)
         tips = self.env.sim.field("site_xpos").cpu().numpy()[:, self._hold_tips].mean(axis=1)
-        point = self.env.view.point_pos(*self._hold_at).cpu().numpy()
-        return np.linalg.norm(tips - point, axis=1) < HELD
+        off = tips - self.env.view.point_pos(*self._hold_at).cpu().numpy()
+        return (np.linalg.norm(off[:, :2], axis=1) < HELD) & (off[:, 2] < RESTS_ABOVE)
 
     def _done(self) -> np.ndarray:
         done = self.env.task.joint_progress(self.env.view, self.plan.joint) >= self.plan.done
