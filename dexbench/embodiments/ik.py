@@ -71,7 +71,8 @@ class Clearance:
 
     A pair closer than that adds one row: the moving geom's nearest point, pushed along
     the pair's separating direction by the shortfall (weight 1, like the site's
-    position, so the pose gives way where both cannot hold).
+    position, so the pose gives way where both cannot hold). An obstacle the joints
+    move too (an arm's own hand) counts with its nearest point's motion taken off.
     """
 
     pairs: tuple[tuple[int, int], ...]
@@ -93,7 +94,11 @@ class Clearance:
                 continue
             away *= np.sign(dist) / norm if dist else 1.0 / norm
             mujoco.mj_jac(model, data, jacp, None, fromto[:3], model.geom_bodyid[geom])
-            out.append((np.array([self.margin - dist]), (away @ jacp[:, dadr])[None]))
+            row = away @ jacp[:, dadr]
+            if model.body_weldid[model.geom_bodyid[obstacle]]:  # the obstacle moves too
+                mujoco.mj_jac(model, data, jacp, None, fromto[3:], model.geom_bodyid[obstacle])
+                row = row - away @ jacp[:, dadr]
+            out.append((np.array([self.margin - dist]), row[None]))
         return out
 
 

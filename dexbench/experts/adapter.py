@@ -140,15 +140,35 @@ class ActionAdapter:
         self._hold: dict[str, np.ndarray] = {}  # per side: each env's steps to the next check
 
     def _table_clearance(self, side: str) -> Clearance | None:
-        """An arm side's moving link geoms (above the hand's root) against the table top;
-        None without a table."""
+        """An arm side's moving link geoms (above the hand's root) against the table top
+        and against the hand's mount part (`_mount_part`); None without a table."""
         model = self.model
         try:
             table = model.geom("table_top").id
         except KeyError:
             return None
         moving, _ = self._arm_links(side)
-        return Clearance(tuple((g, table) for g in moving), TABLE_CLEARANCE)
+        return Clearance(tuple((g, table) for g in moving) + self._mount_part(side, moving),
+                         TABLE_CLEARANCE)
+
+    def _mount_part(self, side: str, links: list[int]) -> tuple[tuple[int, int], ...]:
+        """(link, hand geom) pairs of the hand's part rigid with its root (the Shadow
+        forearm) that the simulator lets touch and that stand clear at home: turning the
+        palm through the wrist can drive that part into the arm's own forearm link, where
+        the contact stalls the wrist joint short of its target (the FR3's link 5 held a
+        Shadow hand's pour turn to 20 of 100 degrees)."""
+        model, data = self.model, self._scratch
+        root = model.body(self.env.embodiment.sides[side].hand_root).id
+        part = [g for b in subtree(model, root) if model.body_weldid[b] == model.body_weldid[root]
+                for g in self._collidable(b)]
+        data.qpos[:] = model.qpos0
+        for joint, q in self.env.embodiment.sides[side].home_qpos.items():
+            data.qpos[model.joint(joint).qposadr[0]] = q
+        mujoco.mj_kinematics(model, data)
+        fromto = np.zeros(6)
+        return tuple((a, b) for a in links for b in part if self._collide(a, b)
+                     and mujoco.mj_geomDistance(model, data, a, b, 1.0, fromto)
+                     > TABLE_CLEARANCE)
 
     def _arm_links(self, side: str) -> tuple[list[int], int]:
         """A side's moving arm link geoms (those that collide, from the hand's root up to

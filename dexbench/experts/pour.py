@@ -30,6 +30,7 @@ from dexbench.experts.base import host_ids
 from dexbench.experts.grasp import GraspExpert, Phase, stand_off
 from dexbench.experts.motion import turned
 from dexbench.tasks.plans import PourPlan, locate
+from dexbench.tasks.predicates import tilt_deg
 
 SQUEEZE = "pour_squeeze"  # the pose name this expert adds to its own adapter
 # m the open fingers' geom bounding boxes may reach below the table top: boxes overstate
@@ -53,6 +54,7 @@ class PourExpert:
         if plan.grasp.standoff is not None:  # from where the hand clears the table
             self.grasp.offset[2] += stand_off(self.grasp, plan.grasp.standoff)
         self._held_rot = self.grasp.grasp_rot.copy()
+        self._up = env.task.objects[plan.grasp.obj].axes.get("up")
         self._angle = np.zeros(env.num_envs)
         self._dt = env.control_dt
         actuators = env.embodiment.actuators
@@ -85,9 +87,14 @@ class PourExpert:
         risen = carry & (grasp.pos[:, 2] > grasp.lift_from[:, 2] + self.plan.clearance)
         # Turn gradually: the hanging vessel must not be flung out of the fingers.
         step = self.plan.turn_rate * self._dt
+        limit = np.full(len(self._angle), self.plan.tilt)
+        if self.plan.tip is not None:  # on past `tilt` while the vessel is not tipped
+            up = tilt_deg(self.grasp.env.view.axis(*self._up)).cpu().numpy()
+            limit = np.where(up < self.plan.tip, self.plan.tilt + self.plan.further,
+                             np.maximum(self._angle, self.plan.tilt))
         start = self._grasp_turn
         self._angle = np.where(risen, np.minimum(np.maximum(self._angle, start) + step,
-                                                 self.plan.tilt), start)
+                                                 limit), start)
         axis = self._held_rot @ np.asarray(self.plan.about)
         grasp.grasp_rot[:] = turned(axis, self._angle) @ self._held_rot
         return grasp.act()

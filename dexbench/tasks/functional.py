@@ -51,12 +51,15 @@ class FunctionalPourMug(PourTask):
     # the palm and the mug. The fingers close twice as hard as the hook synergy (the
     # Shadow hand's are weak); the index finger stays open and the thumb swings aside:
     # both would otherwise lie at the rim once the mug is tipped and settled in the hand.
+    # The hand turns 100 degrees, and on up to 120 until the mug is tipped 110: the
+    # Shadow hand's weak grip lets the mug settle 10-25 degrees further over than its
+    # turn, a firm grip (Sharpa's, Wuji's) holds it at the turn (100 left it at 90).
     expert = PourPlan(
         GraspPlan("mug", point=(0.0, 0.0, 0.045), shift=(-0.01, 0.0, -0.015), yaw="body",
                   yaw_offset=handle_between("mug", -0.3, 1.25 * math.pi), side=True,
                   synergy="hook", target=task_goal, goal_point="rim"),
         tilt=1.75, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17,
-        overrides=KEEP_OFF_RIM)
+        overrides=KEEP_OFF_RIM, tip=110.0, further=0.35)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"mug": procedural.add_mug(spec, "mug")}

@@ -155,10 +155,12 @@ class FunctionalHammerStrike(TabletopTask):
     depth = 0.06
     # Across the handle, near the head (a short lever for the press), face over the head;
     # squeezed: at the synergy's own closure the heavy head swings the handle 50 deg
-    # round in the fingers as soon as it is lifted.
+    # round in the fingers as soon as it is lifted. The mount's IK takes the hand's wrist
+    # as commanded (`commanded_hand`): the lifted head swings the Shadow wrist, and an
+    # arm chasing each swing flung the hammer out of the hand (fr3_shadow 0.2 -> 1.0).
     expert = StrikePlan(GraspPlan("hammer", point=("head", (-0.075, 0.0, 0.0)),
                                   shift=(0.03, 0.0, -0.045), yaw="body", yaw_offset=math.pi / 2,
-                                  squeeze=2.0),
+                                  squeeze=2.0, commanded_hand=True),
                         face="face", on="board", at="nail_head", done=_nail_home,
                         hover=0.03, depth=0.02, press=1.0)
 

@@ -399,7 +399,14 @@ class PourPlan:
     of `overrides` go to its target instead. `grasp_turn` (rad, about `about` too) is
     already there at the grasp; `tilt` is the whole turn, `grasp_turn` included. The
     actuators matching a regex of `open_overrides` go to its target in the open hand (the
-    approach): a thumb standing off the palm would knock a tall vessel over on the way in."""
+    approach): a thumb standing off the palm would knock a tall vessel over on the way in.
+    With `tip` (deg), a vessel whose "up" axis is tipped less than that from upright once
+    the turn has reached `tilt` is turned on, up to `further` (rad) past it: how far a
+    held vessel tips for a given turn depends on the grip, a weak one (the Shadow
+    hand's) lets it settle further over in the fingers, a firm one (Sharpa's, Wuji's)
+    holds it at the hand's own turn, short of the pour. (Stopping the turn short of
+    `tilt` instead drops it from a hand that tips it early, LEAP's: it lies in the
+    fingers only once the hand is turned over.)"""
 
     grasp: GraspPlan
     tilt: float
@@ -410,6 +417,8 @@ class PourPlan:
     overrides: tuple[tuple[str, float], ...] = ()
     grasp_turn: float = 0.0
     open_overrides: tuple[tuple[str, float], ...] = ()
+    tip: float | None = None
+    further: float = 0.0
 
 
 @dataclass(frozen=True)
