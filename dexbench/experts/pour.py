@@ -13,6 +13,11 @@ the hand's own geometry) above the table, so a broad hand (LEAP) is not stopped 
 table short of the vessel; hands as narrow as the Shadow hand keep their plan. A hand
 whose size the plans' body grasp does not fit moves it by its own `HandSpec.vessel_shift`
 and `vessel_turn` (LEAP's).
+
+A round vessel (`PourPlan.round_body`) may be held from any side: a hand on an arm that
+grossly misses the plan's handshake grasp or its pour (the xArm7's reach with the Shadow
+forearm pointing up at the end of the pour) takes the grasp turned about the vessel's
+axis that the arm's IK reaches best.
 """
 
 from __future__ import annotations
@@ -27,8 +32,14 @@ import torch
 from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import host_ids
-from dexbench.experts.grasp import GraspExpert, Phase, stand_off
-from dexbench.experts.motion import turned
+from dexbench.experts.grasp import (
+    APPROACH_HEIGHT,
+    APPROACH_LIFT,
+    GraspExpert,
+    Phase,
+    stand_off,
+)
+from dexbench.experts.motion import step_towards, turned, yawed
 from dexbench.tasks.plans import PourPlan, locate
 from dexbench.tasks.predicates import tilt_deg
 
@@ -36,6 +47,17 @@ SQUEEZE = "pour_squeeze"  # the pose name this expert adds to its own adapter
 # m the open fingers' geom bounding boxes may reach below the table top: boxes overstate
 # round fingers, and the lowest finger of a hand holding a vessel's foot rests on the table.
 PRESS = 0.03
+# Turns (rad) about a round vessel's vertical axis its grasp may take, tried nearest first.
+TURNS = sorted(np.linspace(-np.pi, np.pi, 12, endpoint=False), key=abs)
+# A turn missed by at most this much more (`ActionAdapter.reach_cost`) than the least
+# missed counts as good as that one: the nearer turn is taken (the scratch IK that scores
+# them is a guess of the adapter's, which follows the way there step by step).
+MARGIN = 1.0
+# The plan's own turn is given up only when that guess misses it by this much (20 cm,
+# or 2.5 rad, along the way): the FR3 takes the cup's handshake grasp and pour half the
+# time where the guess misses it by up to 9.
+GROSS = 10.0
+WAYPOINTS = 4  # poses from the hand's to above the grasp that `_turn_round` checks
 
 
 class PourExpert:
@@ -83,6 +105,8 @@ class PourExpert:
         # step): keep it, and turn what the grasp expert follows away from it.
         planned = (grasp.phase == Phase.APPROACH) & (grasp.timer <= 1.5 * self._dt)
         self._held_rot[planned] = grasp.grasp_rot[planned]
+        if self.plan.round_body:  # once per plan: `GraspExpert` planned on the last step
+            self._turn_round(np.flatnonzero(planned & (grasp.timer > 0.5 * self._dt)))
         carry = grasp.phase == Phase.CARRY
         risen = carry & (grasp.pos[:, 2] > grasp.lift_from[:, 2] + self.plan.clearance)
         # Turn gradually: the hanging vessel must not be flung out of the fingers.
@@ -98,6 +122,58 @@ class PourExpert:
         axis = self._held_rot @ np.asarray(self.plan.about)
         grasp.grasp_rot[:] = turned(axis, self._angle) @ self._held_rot
         return grasp.act()
+
+    def _turn_round(self, ids: np.ndarray) -> None:
+        """Turn the fresh grasps `ids` of a round vessel about the vertical by the least
+        of `TURNS` whose way in (from the hand's pose to above the grasp), grasp,
+        half-way pour and finished pour (the rim at the target), taken in turn, the
+        mount misses within `MARGIN` of the best (`ActionAdapter.reach_cost`). The
+        plan's own turn stays unless missed by `GROSS` or more (a floating wrist misses
+        none); an arm's wrist limits may forbid it (the handshake grasp of a cup tipped
+        115 deg over its fingertips, the Shadow forearm then pointing up)."""
+        grasp, plan = self.grasp, self.plan
+        point, _ = grasp._object_point(grasp.body, grasp.point)
+        rim, _ = grasp._object_point(grasp.goal_body, grasp.goal_point)
+        goal = (rim + [0.0, 0.0, plan.grasp.lift] if plan.grasp.target is None
+                else np.asarray(plan.grasp.target(grasp.env), dtype=float))
+        about = np.asarray(plan.about)
+        for i in ids:
+            held_rots, costs = [], []
+            for turn in TURNS:
+                held = yawed(self._held_rot[i], np.array([turn]))
+                axis = held @ about
+                at_grasp = (turned(axis, self._grasp_turn) @ held)[0]
+                pos = point[i] - at_grasp @ grasp.offset
+                rim_in_hand = at_grasp.T @ (rim[i] - pos)
+                half = (turned(axis, (self._grasp_turn + plan.tilt) / 2) @ held)[0]
+                poured = (turned(axis, plan.tilt) @ held)[0]
+                end = goal[i] - poured @ rim_in_hand
+                poses = [*self._way_in(i, pos, at_grasp), (pos, at_grasp),
+                         ((pos + end) / 2 + [0.0, 0.0, plan.clearance], half), (end, poured)]
+                held_rots.append(held[0])
+                costs.append(grasp.adapter.reach_cost(grasp.side, i, poses))
+                if costs[0] < GROSS:
+                    break
+            near = min(costs) + MARGIN
+            self._held_rot[i] = next(r for r, c in zip(held_rots, costs, strict=True)
+                                     if c <= near)
+
+    def _way_in(self, i: int, pos: np.ndarray, rot: np.ndarray
+                ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """`WAYPOINTS` palm poses from env `i`'s commanded one to above the grasp (`pos`,
+        `rot`), evenly apart: the arm's IK follows the way there step by step."""
+        grasp = self.grasp
+        above = pos - APPROACH_HEIGHT * rot[:, 2]
+        above[2] += APPROACH_LIFT * self.plan.grasp.side
+        here, turn = grasp.pos[i:i + 1], grasp.rot[i:i + 1]
+        cos = (np.trace(rot @ turn[0].T) - 1.0) / 2.0
+        step, angle = np.linalg.norm(above - here) / WAYPOINTS, np.arccos(np.clip(cos, -1, 1))
+        out = []
+        for _ in range(WAYPOINTS):
+            here, turn = step_towards(here, turn, above[None], rot[None], step + 1e-6,
+                                      angle / WAYPOINTS + 1e-6)
+            out.append((here[0], turn[0]))
+        return out
 
 
 def _overridden(pose: np.ndarray, actuators: Sequence[str],

@@ -29,11 +29,13 @@ THUMB_BACK = ((r"_thumb_CMC_FE_ctrl$", -0.17), (r"_thumb_MCP_FE_ctrl$", -0.52),
 def body_pour(vessel: str, outlet: str) -> PourPlan:
     """Pour a handle-less vessel 10 cm tall (cup, can) held round its body: as the mug, but
     held at 4 cm and 1 cm further out along the fingers (the thumb's base would reach the
-    rim band), and turned 115 degrees, as the vessel lags the hand's turn by some 15."""
+    rim band), and turned 115 degrees, as the vessel lags the hand's turn by some 15.
+    Round, it may be held from any side (an arm's reach: `PourPlan.round_body`)."""
     return PourPlan(
         GraspPlan(vessel, point=(0.0, 0.0, 0.04), shift=(0.0, 0.0, -0.015), yaw="none",
                   side=True, synergy="hook", target=task_goal, goal_point=outlet),
-        tilt=2.0, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17, overrides=KEEP_OFF_RIM)
+        tilt=2.0, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17, overrides=KEEP_OFF_RIM,
+        round_body=True)
 
 
 @register

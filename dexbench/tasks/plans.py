@@ -406,7 +406,10 @@ class PourPlan:
     hand's) lets it settle further over in the fingers, a firm one (Sharpa's, Wuji's)
     holds it at the hand's own turn, short of the pour. (Stopping the turn short of
     `tilt` instead drops it from a hand that tips it early, LEAP's: it lies in the
-    fingers only once the hand is turned over.)"""
+    fingers only once the hand is turned over.)
+    A `round_body` vessel (a cup, a can: round about its vertical axis) may be held from any
+    side: a hand whose mount grossly misses the plan's grasp or pour (an arm's reach and
+    wrist limits) takes the turn about that axis its mount reaches best."""
 
     grasp: GraspPlan
     tilt: float
@@ -419,6 +422,7 @@ class PourPlan:
     open_overrides: tuple[tuple[str, float], ...] = ()
     tip: float | None = None
     further: float = 0.0
+    round_body: bool = False
 
 
 @dataclass(frozen=True)
