@@ -156,7 +156,7 @@ class GraspExpert:
     def _palm(self) -> tuple[np.ndarray, np.ndarray]:
         return site_pose(self.env, self._palm_site)
 
-    def _object_point(self, body: str, local: tuple[float, float, float],
+    def object_point(self, body: str, local: tuple[float, float, float],
                       ) -> tuple[np.ndarray, np.ndarray]:
         view = self.env.view
         pos = view.body_pos(body)
@@ -183,7 +183,7 @@ class GraspExpert:
         self.grasp_pos[ids] = point[ids] - rot @ self.offset
 
     def act(self) -> torch.Tensor:
-        point, quat = self._object_point(self.body, self.point)
+        point, quat = self.object_point(self.body, self.point)
         self.timer += self._dt
         phase = self.phase
         target_pos, target_rot = self.grasp_pos.copy(), self.grasp_rot.copy()
@@ -243,7 +243,7 @@ class GraspExpert:
             if self.plan.target is None:
                 target_pos[carry] = (self.lift_from + np.array([0.0, 0.0, self.plan.lift]))[carry]
             else:
-                goal_point, _ = self._object_point(self.goal_body, self.goal_point)
+                goal_point, _ = self.object_point(self.goal_body, self.goal_point)
                 # A copy: `task_goal` may be a view of the task's own goal, which the
                 # raise below must not move (the success check and the goal observation
                 # read it).

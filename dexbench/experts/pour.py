@@ -132,8 +132,8 @@ class PourExpert:
         none); an arm's wrist limits may forbid it (the handshake grasp of a cup tipped
         115 deg over its fingertips, the Shadow forearm then pointing up)."""
         grasp, plan = self.grasp, self.plan
-        point, _ = grasp._object_point(grasp.body, grasp.point)
-        rim, _ = grasp._object_point(grasp.goal_body, grasp.goal_point)
+        point, _ = grasp.object_point(grasp.body, grasp.point)
+        rim, _ = grasp.object_point(grasp.goal_body, grasp.goal_point)
         goal = (rim + [0.0, 0.0, plan.grasp.lift] if plan.grasp.target is None
                 else np.asarray(plan.grasp.target(grasp.env), dtype=float))
         about = np.asarray(plan.about)
