@@ -157,7 +157,7 @@ class GraspExpert:
         return site_pose(self.env, self._palm_site)
 
     def object_point(self, body: str, local: tuple[float, float, float],
-                      ) -> tuple[np.ndarray, np.ndarray]:
+                     ) -> tuple[np.ndarray, np.ndarray]:
         view = self.env.view
         pos = view.body_pos(body)
         quat = view.body_quat(body)
