@@ -6,7 +6,9 @@ import pytest
 import torch
 from test_tasks import _fresh
 
+from dexbench.embodiments.hand_geometry import fingertip_thickness
 from dexbench.experts import make_expert
+from dexbench.experts.hold_actuate import wedge_depth
 from dexbench.sim.backend import INTEGRATION
 from dexbench.tasks.registry import make_env
 
@@ -121,4 +123,25 @@ def test_stapler_pusher_starts_when_the_holding_wrist_meets_the_table():
         if solved.all():
             break
     assert expert.stage[0] > 0, "the pusher goes in once the holder has come to rest"
+    assert solved.all()
+
+
+def test_stapler_thick_finger_tips_wedge_under_the_lip():
+    """Allegro's 24 mm finger tips don't fit under the stapler's lip (16 mm up): aimed at
+    the point they stopped against its face and slid up it, the arm never moved. Aimed
+    further in they wedge under its corner. Shadow's 14 mm tips fit under it, Inspire's
+    17 mm ones meet its corner steeply enough to lift it: both aim at the point."""
+    for hand in ("shadow", "inspire"):
+        assert wedge_depth(fingertip_thickness(hand, "right"), 0.008) == 0.0, hand
+    env = make_env("OpenStapler", "bimanual_floating_allegro", num_envs=1, seed=0, nthread=1)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(1))
+    assert 0.005 < expert.into[0] < 0.015
+    solved = torch.zeros(1, dtype=torch.bool)
+    for _ in range(300):  # the expert needs ~210 of the 480 steps
+        _, _, terminated, _, _ = env.step(expert.act())
+        solved |= terminated
+        if solved.all():
+            break
     assert solved.all()

@@ -184,3 +184,38 @@ def _geom_corners(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
         local = center + signs * half
         corners.append(data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T)
     return np.concatenate(corners)
+
+
+@functools.cache
+def fingertip_thickness(hand_name: str, side: str) -> float:
+    """Mean thickness (m) of the open hand's finger tips (thumb excluded) along the palm
+    normal: what must fit into a gap for the tip to slide in flat (under an edge). Each is
+    measured as the distance between two planes, normal to the palm, touching its collision
+    geoms on either side."""
+    hand = HANDS[hand_name]
+    geo = hand_geometry(hand_name, side)
+    spec = hand_model_spec(hand, side)
+    normal = geo.frame_rot[:, 2]
+    for sign in (1.0, -1.0):  # a plane 1 m out on each side, facing the hand
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, (geo.frame_rot @ np.diag([1.0, sign, sign])).ravel())
+        spec.worldbody.add_geom(name=f"thickness_{sign:+.0f}", type=mujoco.mjtGeom.mjGEOM_PLANE,
+                                size=[1.0, 1.0, 0.01], contype=0, conaffinity=0,
+                                pos=(geo.frame_pos - sign * normal).tolist(), quat=quat.tolist())
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    spec.option.timestep = 0.002
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    _settle(model, data, geo.synergies["open"])
+    planes = [model.geom(f"thickness_{s:+.0f}").id for s in (1.0, -1.0)]
+    fromto = np.zeros(6)
+    out = []
+    for body in hand.sides[side].fingertip_bodies[1:]:
+        bid = model.body(body).id
+        geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == bid
+                 and (model.geom_contype[g] or model.geom_conaffinity[g])]
+        gaps = [min(mujoco.mj_geomDistance(model, data, p, g, 2.0, fromto) for g in geoms)
+                for p in planes]
+        out.append(2.0 - sum(gaps))
+    return float(np.mean(out))

@@ -5,10 +5,11 @@ a scissor ring). The other hand runs its own plan (typically a press pinning the
 to the table); once its finger tips are over their point, the pushing hand comes in beside
 the driven point, on the side it pushes from, and keeps its finger pads a little ahead
 of the point along the joint's motion (the arc about a hinge, the line of a slide) until
-the joint has covered the plan's `done` fraction. There it stays, or, releasing, rises
-back and levels the hand (a hanging hand is near the floating wrist's gimbal lock, bad
-for whatever step comes next). Without a hold plan the other hand moves out of the way
-(outwards and up), or, with a `then` plan (picking the object up once its part has
+the joint has covered the plan's `done` fraction (finger tips too thick for the gap under
+an edge they lift aim further in, towards the hinge: `wedge_depth`). There it stays, or,
+releasing, rises back and levels the hand (a hanging hand is near the floating wrist's
+gimbal lock, bad for whatever step comes next). Without a hold plan the other hand moves
+out of the way (outwards and up), or, with a `then` plan (picking the object up once its part has
 moved), waits outwards of and above that plan's point and runs it once the joint is
 done and a releasing pusher has backed off; that pusher then goes on outwards and up, out
 of the way of the other arm reaching in (on arms the two wrists and forearms otherwise
@@ -24,6 +25,8 @@ import mujoco
 import numpy as np
 import torch
 
+from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.embodiments.hand_geometry import fingertip_thickness
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import (
     ActionAdapter,
@@ -55,6 +58,29 @@ WAIT_OUT, WAIT_UP = 0.22, 0.12
 CLEAR_OUT, CLEAR_UP = 0.15, 0.3  # m a released pusher then moves outwards and up
 UP = np.array([0.0, 0.0, 1.0])
 LEVEL = 1e-3  # trace(R1^T R2) this close to 3: the hand has turned level
+# rad above level a finger tip's contact with an edge's corner must face for the tip,
+# rising, to carry the corner up rather than slide past it: beyond the friction cone
+# (friction 1, MuJoCo's default, the tips' and the parts') about the vertical
+SLIDES_BELOW = np.pi / 4
+
+
+def wedge_depth(thickness: float, height: np.ndarray) -> np.ndarray:
+    """(N,) m the pads aim past their point, towards the hinge, where the point (the pads'
+    centre, under the edge they lift) stands `height` (N,) above the table.
+
+    The plan centres the pads in the gap under the edge, 2 `height` tall. A finger tip
+    `thickness` thick (radius r, its site at its centre) fits in it; a thicker one, lying
+    on the table, meets the edge's lower corner on its upper front and stops with its
+    centre sqrt(r^2 - (2 height - r)^2) out from the point. Lifting, it carries the corner
+    up if their contact faces up more steeply than `SLIDES_BELOW` (Inspire's 17 mm tips
+    under the stapler's lip, 16 mm up: 65 deg), else it slides up the part's face and the
+    joint never moves (Allegro's 24 mm tips: 19 deg, 11 mm out, as measured). Those aim
+    that much further in, which drives them on in under the corner, and it rides up on
+    them (OpenStapler, bimanual_floating_allegro: 0.0 -> 0.9). Zero for a tip that fits,
+    and where the edge is no higher than the tip's centre (pushing in presses it down)."""
+    r, above = thickness / 2, 2 * np.asarray(height) - thickness / 2
+    wedged = (above > 0.0) & (above < r * np.sin(SLIDES_BELOW))
+    return np.where(wedged, np.sqrt(np.maximum(r**2 - above**2, 0.0)), 0.0)
 
 
 class HoldActuateExpert:
@@ -88,6 +114,8 @@ class HoldActuateExpert:
         eye = np.repeat(np.eye(3)[None], n, axis=0)
         self.pos, self.rot, self.level = np.zeros((n, 3)), eye.copy(), eye.copy()
         self.pads = np.zeros((n, 3))  # finger pads in the hand frame
+        self.into = np.zeros(n)  # m the pads aim past the point, towards the hinge
+        self._tip = fingertip_thickness(env.embodiment.hand.name, plan.side)
         self.stage = np.zeros(n, dtype=np.int64)  # hover, beside, on, push, done
         self.away = np.zeros(n, dtype=bool)  # released: back at the hover point
         self.started = np.zeros(n, dtype=bool)  # the other hand runs `then`
@@ -101,6 +129,9 @@ class HoldActuateExpert:
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pads[ids] = tips[ids].mean(axis=1)
+        if self.plan.yaw is not None and not self._slide:
+            height = self.env.view.point_pos(self.body, self.local).cpu().numpy()[ids, 2]
+            self.into[ids] = wedge_depth(self._tip, height - TABLE_TOP_Z)
         self.stage[ids], self.away[ids], self.started[ids] = 0, False, False
         self.adapter.reset(ids)
         if self.holder is not None:
@@ -135,21 +166,22 @@ class HoldActuateExpert:
             return self.stage == 4
         return self.away & (np.einsum("nij,nij->n", self.rot, self.level) > 3.0 - LEVEL)
 
-    def _motion(self, point: np.ndarray) -> np.ndarray:
-        """(N, 3) unit direction the joint moves `point` in, towards the push."""
+    def _motion(self, point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 3) unit directions the joint moves `point` in, towards the push, and from
+        the hinge's axis out to `point` (zero on a slide)."""
         view = self.env.view
         axis = view.axis(self._joint_body, self._joint_axis).cpu().numpy()
         if self._slide:
-            return self.plan.direction * axis
+            return self.plan.direction * axis, np.zeros_like(axis)
         radial = point - view.point_pos(self._joint_body, self._joint_pos).cpu().numpy()
         radial -= (radial * axis).sum(axis=1, keepdims=True) * axis
         radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
-        return self.plan.direction * np.cross(axis, radial)
+        return self.plan.direction * np.cross(axis, radial), radial
 
     def act(self) -> torch.Tensor:
         view = self.env.view
         point = view.point_pos(self.body, self.local).cpu().numpy()
-        push = self._motion(point)
+        push, radial = self._motion(point)
         if self.plan.yaw is None:  # fingers hanging, pads facing the push
             heading = palm_down(np.arctan2(-push[:, 1], -push[:, 0]))
             rot = heading @ pitch_down(np.pi / 2)
@@ -160,7 +192,8 @@ class HoldActuateExpert:
             rot = heading @ pitch_down(self.plan.pitch)
             approach = view.axis(self.root, self.plan.approach).cpu().numpy()
             beside = point + BESIDE * approach / np.linalg.norm(approach, axis=1, keepdims=True)
-        goals = (beside + HOVER * approach, beside, point, point + LEAD * push)
+        into = self.into[:, None] * radial
+        goals = (beside + HOVER * approach, beside, point - into, point + LEAD * push - into)
         pads = np.einsum("nij,nj->ni", rot, self.pads)
         target = np.stack([goals[min(s, 3)][i] for i, s in enumerate(self.stage)]) - pads
         arrived = np.linalg.norm(self.pos - target, axis=1) < ARRIVED
