@@ -132,8 +132,10 @@ class TurnExpert:
             rot = palm_down(body_yaw(view.body_quat(self.frame).cpu().numpy())) @ pitch_down(
                 self.plan.pitch)
         approach = view.axis(self.frame, self.plan.approach).cpu().numpy()
-        beside = tip - BESIDE * tangent
-        ahead = tip + LEAD * tangent
+        # Past the tip along the fingers (the hand's x axis), under a lid's edge.
+        under = tip + self.plan.under * rot[:, :, 0]
+        beside = under - BESIDE * tangent
+        ahead = under + LEAD * tangent
         pads_world = np.einsum("nij,nj->ni", rot, self.pads)
         goal = {0: beside + HOVER * approach, 1: beside, 2: ahead,
                 3: self.lift_from + HOVER * approach}

@@ -67,9 +67,12 @@ class OpenLaptop(ArticulatedTask):
     placements: ClassVar = {"laptop": Placement((-0.30, 0.0), (-0.20, 0.20), (-0.2, 0.2))}
     joint, threshold, reset_at = "laptop/hinge", 0.70, math.radians(-15.0)
     # Fingers tilted down slide under the raised front edge of the lid, from the front,
-    # and lift it up and over; the base's own weight holds it down.
+    # and lift it up and over; the base's own weight holds it down. The pads go 12 mm past
+    # the edge: Wuji's soft fingers (~0.8 N at the tip) only bent under the lid (~4 N at
+    # its edge) when it rested on their very tips; deeper (15-20 mm), the Sharpa hand
+    # often pressed the lid shut on its way in.
     expert = TurnPlan("laptop", "lid_edge", direction=-1.0, pitch=0.6,
-                      approach=(-1.0, 0.0, 0.3))
+                      approach=(-1.0, 0.0, 0.3), under=0.012)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"laptop": articulated.add_laptop(spec, "laptop")}

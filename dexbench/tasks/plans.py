@@ -246,7 +246,10 @@ class TurnPlan:
     the hinge; pads still facing the push): an arm's hand then reaches a tip far out
     over the table. With `period` (rad) the tip repeats that often round the hinge (a
     cap's fins): the hand pushes one copy through a period, lifts and comes down behind
-    the next, stroke after stroke. `push_speed` (m/s) limits the hand while it pushes."""
+    the next, stroke after stroke. `push_speed` (m/s) limits the hand while it pushes.
+    `under` (m, with `pitch`) slides the pads that far past the tip along the fingers, so
+    a lid's edge rests nearer the knuckles: soft fingers (Wuji's) bend away under a heavy
+    lid pushed at their tips, but hold it on a short lever arm."""
 
     obj: str
     tip: PointRef
@@ -257,6 +260,7 @@ class TurnPlan:
     lean: float = 0.0
     period: float | None = None
     push_speed: float = 0.1
+    under: float = 0.0
 
 
 @dataclass(frozen=True)
