@@ -2,13 +2,15 @@
 that satisfies each paper condition and, for every clause, a near miss that does not."""
 
 import mujoco
+import numpy as np
 import pytest
 import torch
 from test_tasks import _fresh
 
 from dexbench.embodiments.hand_geometry import fingertip_thickness
 from dexbench.experts import make_expert
-from dexbench.experts.hold_actuate import wedge_depth
+from dexbench.experts.adapter import tips_in_palm_frame
+from dexbench.experts.hold_actuate import level_row, wedge_depth
 from dexbench.sim.backend import INTEGRATION
 from dexbench.tasks.registry import make_env
 
@@ -140,6 +142,29 @@ def test_stapler_thick_finger_tips_wedge_under_the_lip():
     assert 0.005 < expert.into[0] < 0.015
     solved = torch.zeros(1, dtype=torch.bool)
     for _ in range(300):  # the expert needs ~210 of the 480 steps
+        _, _, terminated, _, _ = env.step(expert.act())
+        solved |= terminated
+        if solved.all():
+            break
+    assert solved.all()
+
+
+def test_folder_flap_lifted_by_a_staggered_finger_row():
+    """LEAP's open finger tips step 14 mm along the palm normal from index to ring: with
+    its 25 mm tips the row stood 43 mm tall under the flap's 43 mm high edge, the index
+    tip's back met the edge from above and pressed the flap shut (0 of 20). Rolled level
+    about the fingers, the row fits under it and lifts it."""
+    env = make_env("OpenFlatFolder", "bimanual_floating_leap", num_envs=1, seed=0, nthread=1)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(1))
+    _, _, tips = tips_in_palm_frame(env, expert._palm, expert._tips)
+    level = np.einsum("nij,nkj->nki", expert.roll, tips)
+    assert np.ptp(tips[0, :, 2]) > 0.01
+    assert np.ptp(level[0, :, 2]) < 1e-3, "the row lies in the palm plane"
+    assert np.allclose(level_row(np.array([[[0.1, -0.02, 0.0], [0.1, 0.02, 0.0]]])), np.eye(3))
+    solved = torch.zeros(1, dtype=torch.bool)
+    for _ in range(340):  # the expert needs ~310 of the 480 steps
         _, _, terminated, _, _ = env.step(expert.act())
         solved |= terminated
         if solved.all():

@@ -6,7 +6,8 @@ to the table); once its finger tips are over their point, the pushing hand comes
 the driven point, on the side it pushes from, and keeps its finger pads a little ahead
 of the point along the joint's motion (the arc about a hinge, the line of a slide) until
 the joint has covered the plan's `done` fraction (finger tips too thick for the gap under
-an edge they lift aim further in, towards the hinge: `wedge_depth`). There it stays, or,
+an edge they lift aim further in, towards the hinge: `wedge_depth`; a finger row stepped
+along the palm normal is rolled level first: `level_row`). There it stays, or,
 releasing, rises back and levels the hand (a hanging hand is near the floating wrist's
 gimbal lock, bad for whatever step comes next). Without a hold plan the other hand moves
 out of the way (outwards and up), or, with a `then` plan (picking the object up once its part has
@@ -64,6 +65,23 @@ LEVEL = 1e-3  # trace(R1^T R2) this close to 3: the hand has turned level
 SLIDES_BELOW = np.pi / 4
 
 
+def level_row(tips: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) turns about the hand's x axis (along the fingers) that bring the finger
+    tips (N, K, 3, in the hand frame) level across the hand: the plan centres the pads in
+    the gap under an edge, and a row whose tips step towards the palm normal from finger
+    to finger (LEAP's, 14 mm from index to ring, open) adds that step to the tips'
+    thickness, so its highest tip's back met the folder's flap edge from above and pressed
+    it shut. Identity for a level row (Shadow, Allegro)."""
+    y, z = tips[..., 1], tips[..., 2]
+    y, z = y - y.mean(axis=1, keepdims=True), z - z.mean(axis=1, keepdims=True)
+    angle = np.arctan((y * z).sum(axis=1) / np.maximum((y * y).sum(axis=1), 1e-12))
+    c, s = np.cos(angle), np.sin(angle)
+    turn = np.zeros((len(angle), 3, 3))
+    turn[:, 0, 0] = 1.0
+    turn[:, 1, 1], turn[:, 1, 2], turn[:, 2, 1], turn[:, 2, 2] = c, s, -s, c
+    return turn
+
+
 def wedge_depth(thickness: float, height: np.ndarray) -> np.ndarray:
     """(N,) m the pads aim past their point, towards the hinge, where the point (the pads'
     centre, under the edge they lift) stands `height` (N,) above the table.
@@ -114,6 +132,7 @@ class HoldActuateExpert:
         eye = np.repeat(np.eye(3)[None], n, axis=0)
         self.pos, self.rot, self.level = np.zeros((n, 3)), eye.copy(), eye.copy()
         self.pads = np.zeros((n, 3))  # finger pads in the hand frame
+        self.roll = eye.copy()  # levels the finger row under an edge: `level_row`
         self.into = np.zeros(n)  # m the pads aim past the point, towards the hinge
         self._tip = fingertip_thickness(env.embodiment.hand.name, plan.side)
         self.stage = np.zeros(n, dtype=np.int64)  # hover, beside, on, push, done
@@ -130,6 +149,7 @@ class HoldActuateExpert:
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pads[ids] = tips[ids].mean(axis=1)
         if self.plan.yaw is not None and not self._slide:
+            self.roll[ids] = level_row(tips[ids])
             height = self.env.view.point_pos(self.body, self.local).cpu().numpy()[ids, 2]
             self.into[ids] = wedge_depth(self._tip, height - TABLE_TOP_Z)
         self.stage[ids], self.away[ids], self.started[ids] = 0, False, False
@@ -189,7 +209,7 @@ class HoldActuateExpert:
             beside = point - BESIDE * push
         else:
             heading = palm_down(body_yaw(view.body_quat(self.root).cpu().numpy()) + self.plan.yaw)
-            rot = heading @ pitch_down(self.plan.pitch)
+            rot = heading @ pitch_down(self.plan.pitch) @ self.roll
             approach = view.axis(self.root, self.plan.approach).cpu().numpy()
             beside = point + BESIDE * approach / np.linalg.norm(approach, axis=1, keepdims=True)
         into = self.into[:, None] * radial
