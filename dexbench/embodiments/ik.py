@@ -11,6 +11,25 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+# The residuals at which a palm pose counts as not taken, for the matrix's feasibility test
+# (`dexbench.eval.feasibility`) and the experts' reach scores (`ActionAdapter.reach_cost`).
+POS_TOL = 0.02  # m: about a fingertip's width, below any grasp's margin
+ROT_TOL = 0.25  # rad (~14 deg): beyond it a pose counts as not taken (pose-limited)
+
+
+def rotation_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(...) angle (rad) of the turn between rotation matrices `a` and `b` (..., 3, 3)."""
+    cos = (np.einsum("...ij,...ij->...", a, b) - 1.0) / 2.0
+    return np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+def pose_residual(model: mujoco.MjModel, data: mujoco.MjData, site: int, pos: np.ndarray,
+                  rot: np.ndarray) -> tuple[float, float]:
+    """(position m, orientation rad) between site `site` at `data.qpos` and a pose."""
+    mujoco.mj_kinematics(model, data)
+    return (float(np.linalg.norm(pos - data.site_xpos[site])),
+            float(rotation_angle(rot, data.site_xmat[site].reshape(3, 3))))
+
 
 def solve_site_pose(
     model: mujoco.MjModel,

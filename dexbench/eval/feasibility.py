@@ -44,15 +44,13 @@ import mujoco
 import numpy as np
 
 from dexbench.embodiments.builder import DEFAULT_WORKSPACE, parse_embodiment, robot_at_home
-from dexbench.embodiments.ik import solve_site_pose
+from dexbench.embodiments.ik import POS_TOL, ROT_TOL, pose_residual, solve_site_pose
 from dexbench.envs.dex_env import DexEnv
 from dexbench.eval.plan import TaskPlan
 from dexbench.eval.records import EpisodeRecord
 from dexbench.eval.runner import run_episodes
 from dexbench.eval.session import EvalSpec, build_env, build_policy
 
-POS_TOL = 0.02  # m: about a fingertip's width, below any grasp's margin
-ROT_TOL = 0.25  # rad (~14 deg): beyond it a pose counts as not taken (pose-limited)
 QUANTILE = 95.0  # percentile of an episode's residuals that decides it
 MIN_REACHABLE = 0.5  # fraction of probe episodes that must be reachable
 IK_ITERATIONS = 100  # per pose, warm-started from the previous pose's solution
@@ -153,15 +151,6 @@ def _robot(embodiment: str, workspace: tuple[float, float, float]) -> _Robot:
     return _Robot(model, data.qpos.copy(), sides)
 
 
-def _residual(model: mujoco.MjModel, data: mujoco.MjData, site: int, pos: np.ndarray,
-              rot: np.ndarray) -> tuple[float, float]:
-    """(position m, orientation rad) between site `site` and the target pose."""
-    mujoco.mj_kinematics(model, data)
-    cur = data.site_xmat[site].reshape(3, 3)
-    cos = np.clip((np.trace(rot @ cur.T) - 1.0) / 2.0, -1.0, 1.0)
-    return float(np.linalg.norm(pos - data.site_xpos[site])), float(np.arccos(cos))
-
-
 def ik_residuals(embodiment: str, positions: np.ndarray, rotations: np.ndarray,
                  workspace: tuple[float, float, float] = DEFAULT_WORKSPACE) -> np.ndarray:
     """(T, sides, 3) residuals of `embodiment`'s mounts (placed for a task's `workspace`)
@@ -186,12 +175,12 @@ def ik_residuals(embodiment: str, positions: np.ndarray, rotations: np.ndarray,
             data.qpos[qadr] = warm
             q, _ = solve_site_pose(model, data, site, list(joints), pos, rot,
                                    iterations=IK_ITERATIONS)
-            res = _residual(model, data, sid, pos, rot)
+            res = pose_residual(model, data, sid, pos, rot)
             if res[0] > POS_TOL or res[1] > ROT_TOL:
                 data.qpos[:] = robot.home
                 q_home, _ = solve_site_pose(model, data, site, list(joints), pos, rot,
                                             iterations=IK_RETRY_ITERATIONS)
-                retry = _residual(model, data, sid, pos, rot)
+                retry = pose_residual(model, data, sid, pos, rot)
                 if cost(retry) < cost(res):
                     q, res = q_home, retry
             reach = res[0]
@@ -201,7 +190,7 @@ def ik_residuals(embodiment: str, positions: np.ndarray, rotations: np.ndarray,
                 data.qpos[qadr] = start
                 solve_site_pose(model, data, site, list(joints), pos, None,
                                 iterations=IK_RETRY_ITERATIONS)
-                reach = min(reach, _residual(model, data, sid, pos, rot)[0])
+                reach = min(reach, pose_residual(model, data, sid, pos, rot)[0])
             warm = q
             out[t, s] = (*res, reach)
     return out

@@ -14,7 +14,15 @@ import mujoco
 import numpy as np
 import torch
 
-from dexbench.embodiments.ik import Clearance, multi_turn, path_blocked, solve_site_pose
+from dexbench.embodiments.ik import (
+    POS_TOL,
+    ROT_TOL,
+    Clearance,
+    multi_turn,
+    path_blocked,
+    pose_residual,
+    solve_site_pose,
+)
 from dexbench.envs.dex_env import DexEnv
 
 IK_ITERATIONS = 10
@@ -24,9 +32,7 @@ TABLE_CLEARANCE = 0.01  # m: arm links kept above the table top
 # trails by 0.2-0.8 rad).
 TURN_LAG, STALL_SPEED = 0.5, 0.1
 RECHECK_SECONDS = 0.5  # a stall where neither way is clear is checked again this late
-# `reach_cost`: IK iterations per pose, and the residuals (m, rad) it counts as one miss
-# (those of the matrix's feasibility test, `dexbench.eval.feasibility`).
-REACH_ITERATIONS, REACH_POS, REACH_ROT = 100, 0.02, 0.25
+REACH_ITERATIONS = 100  # `reach_cost`: IK iterations per pose, as the feasibility test's
 
 
 def subtree(model: mujoco.MjModel, root: int) -> set[int]:
@@ -269,7 +275,7 @@ class ActionAdapter:
         """How badly this side's mount misses a sequence of palm poses (position,
         frame), each solved from the last one's solution, the first from env `env`'s
         measured joints, as the adapter's IK would follow them: the largest of the poses'
-        position residual / `REACH_POS` + orientation residual / `REACH_ROT` (below 1:
+        position residual / `ik.POS_TOL` + orientation residual / `ik.ROT_TOL` (below 1:
         every pose taken; ~0 on a floating mount). Kinematic only: a path through the
         arm's own links is not seen."""
         data, model = self._scratch, self.model
@@ -280,11 +286,8 @@ class ActionAdapter:
         for pos, rot in poses:
             solve_site_pose(model, data, site, joints, pos, rot, iterations=iterations,
                             clearance=self._clearance.get(side))
-            mujoco.mj_kinematics(model, data)
-            miss = np.linalg.norm(pos - data.site_xpos[sid])
-            cos = (np.trace(rot @ data.site_xmat[sid].reshape(3, 3).T) - 1.0) / 2.0
-            turn = np.arccos(np.clip(cos, -1.0, 1.0))
-            worst = max(worst, miss / REACH_POS + turn / REACH_ROT)
+            miss, turn = pose_residual(model, data, sid, pos, rot)
+            worst = max(worst, miss / POS_TOL + turn / ROT_TOL)
         return float(worst)
 
     def pose(self, name: str) -> np.ndarray:

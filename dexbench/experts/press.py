@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, tips_in_palm_frame
 from dexbench.experts.base import host_ids
@@ -73,5 +74,4 @@ class PressExpert:
 
     def _turn(self, target_rot: np.ndarray) -> np.ndarray:
         """Angle (rad) still to turn from the commanded to the target orientation."""
-        cos = (np.einsum("nij,nij->n", self.rot, target_rot) - 1) / 2
-        return np.arccos(np.clip(cos, -1.0, 1.0))
+        return rotation_angle(self.rot, target_rot)

@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from dexbench.embodiments.builder import TABLE_TOP_Z
+from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import (
     ActionAdapter,
@@ -291,5 +292,4 @@ class PushExpert:
 
     def _turn(self, target_rot: np.ndarray) -> np.ndarray:
         """Angle (rad) still to turn from the commanded to the target orientation."""
-        cos = (np.einsum("nij,nij->n", self.rot, target_rot) - 1) / 2
-        return np.arccos(np.clip(cos, -1.0, 1.0))
+        return rotation_angle(self.rot, target_rot)
