@@ -37,7 +37,7 @@ from dexbench.experts.adapter import (
     tips_in_palm_frame,
 )
 from dexbench.experts.base import Expert, host_ids
-from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
+from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, turned
 from dexbench.tasks.plans import HoldActuatePlan, locate
 
 SPEED = 0.4  # m/s in the air
@@ -74,12 +74,8 @@ def level_row(tips: np.ndarray) -> np.ndarray:
     it shut. Identity for a level row (Shadow, Allegro)."""
     y, z = tips[..., 1], tips[..., 2]
     y, z = y - y.mean(axis=1, keepdims=True), z - z.mean(axis=1, keepdims=True)
-    angle = np.arctan((y * z).sum(axis=1) / np.maximum((y * y).sum(axis=1), 1e-12))
-    c, s = np.cos(angle), np.sin(angle)
-    turn = np.zeros((len(angle), 3, 3))
-    turn[:, 0, 0] = 1.0
-    turn[:, 1, 1], turn[:, 1, 2], turn[:, 2, 1], turn[:, 2, 2] = c, s, -s, c
-    return turn
+    slope = np.arctan((y * z).sum(axis=1) / np.maximum((y * y).sum(axis=1), 1e-12))
+    return turned(np.tile([1.0, 0.0, 0.0], (len(slope), 1)), -slope)
 
 
 def wedge_depth(thickness: float, height: np.ndarray) -> np.ndarray:

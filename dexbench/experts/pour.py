@@ -30,6 +30,7 @@ import numpy as np
 import torch
 
 from dexbench.embodiments.hand_geometry import hand_geometry
+from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import host_ids
 from dexbench.experts.grasp import (
@@ -79,6 +80,8 @@ class PourExpert:
         self._up = env.task.objects[plan.grasp.obj].axes.get("up")
         self._angle = np.zeros(env.num_envs)
         self._dt = env.control_dt
+        # a floating wrist takes every pose: only an arm's grasp of a round vessel is turned
+        self._turn_to_reach = plan.round_body and env.embodiment.mount != "floating"
         actuators = env.embodiment.actuators
         ranges = env.embodiment.ctrl_range
         # The adapter blends `open` towards a named pose; this expert's adapter gets one more.
@@ -105,7 +108,7 @@ class PourExpert:
         # step): keep it, and turn what the grasp expert follows away from it.
         planned = (grasp.phase == Phase.APPROACH) & (grasp.timer <= 1.5 * self._dt)
         self._held_rot[planned] = grasp.grasp_rot[planned]
-        if self.plan.round_body:  # once per plan: `GraspExpert` planned on the last step
+        if self._turn_to_reach:  # once per plan: `GraspExpert` planned on the last step
             self._turn_round(np.flatnonzero(planned & (grasp.timer > 0.5 * self._dt)))
         carry = grasp.phase == Phase.CARRY
         risen = carry & (grasp.pos[:, 2] > grasp.lift_from[:, 2] + self.plan.clearance)
@@ -128,8 +131,8 @@ class PourExpert:
         of `TURNS` whose way in (from the hand's pose to above the grasp), grasp,
         half-way pour and finished pour (the rim at the target), taken in turn, the
         mount misses within `MARGIN` of the best (`ActionAdapter.reach_cost`). The
-        plan's own turn stays unless missed by `GROSS` or more (a floating wrist misses
-        none); an arm's wrist limits may forbid it (the handshake grasp of a cup tipped
+        plan's own turn stays unless missed by `GROSS` or more; an arm's wrist limits may
+        forbid it (the handshake grasp of a cup tipped
         115 deg over its fingertips, the Shadow forearm then pointing up)."""
         grasp, plan = self.grasp, self.plan
         point, _ = grasp.object_point(grasp.body, grasp.point)
@@ -166,8 +169,7 @@ class PourExpert:
         above = pos - APPROACH_HEIGHT * rot[:, 2]
         above[2] += APPROACH_LIFT * self.plan.grasp.side
         here, turn = grasp.pos[i:i + 1], grasp.rot[i:i + 1]
-        cos = (np.trace(rot @ turn[0].T) - 1.0) / 2.0
-        step, angle = np.linalg.norm(above - here) / WAYPOINTS, np.arccos(np.clip(cos, -1, 1))
+        step, angle = np.linalg.norm(above - here) / WAYPOINTS, float(rotation_angle(rot, turn[0]))
         out = []
         for _ in range(WAYPOINTS):
             here, turn = step_towards(here, turn, above[None], rot[None], step + 1e-6,
