@@ -15,6 +15,26 @@ from dexbench.sim.backend import INTEGRATION
 from dexbench.tasks.registry import make_env
 
 
+def _with_expert(task: str, embodiment: str | None, num_envs: int, seed: int, **kw):
+    """A freshly reset env and its expert, reset too."""
+    env = make_env(task, embodiment, num_envs=num_envs, seed=seed, **kw)
+    env.reset()
+    expert = make_expert(env)
+    expert.reset(torch.arange(num_envs))
+    return env, expert
+
+
+def _run_until_solved(env, expert, steps: int) -> torch.Tensor:
+    """(N,) which envs the expert solved within `steps` control steps."""
+    solved = torch.zeros(env.num_envs, dtype=torch.bool)
+    for _ in range(steps):
+        _, _, terminated, _, _ = env.step(expert.act())
+        solved |= terminated
+        if solved.all():
+            break
+    return solved
+
+
 def _set_progress(env, joint: str, fraction: float) -> None:
     """Move `joint` `fraction` of the travel reachable from its reset value."""
     lo, hi = env.task.joint_range(joint)
@@ -74,16 +94,8 @@ def test_knife_needs_the_blade_out_and_the_knife_lifted_slowly():
 
 
 def test_hold_actuate_expert_pins_one_ring_and_pushes_the_other():
-    env = make_env("SqueezeScissors", num_envs=2, seed=1)
-    env.reset()
-    expert = make_expert(env)
-    expert.reset(torch.arange(2))
-    solved = torch.zeros(2, dtype=torch.bool)
-    for _ in range(200):  # the expert needs ~130 of the 480 steps
-        _, _, terminated, _, _ = env.step(expert.act())
-        solved |= terminated
-        if solved.all():
-            break
+    env, expert = _with_expert("SqueezeScissors", None, 2, 1)
+    solved = _run_until_solved(env, expert, 200)  # the expert needs ~130 of the 480 steps
     assert solved.all()
     assert expert.holder.pressing.all(), "the left hand holds ring 1 down"
 
@@ -91,10 +103,7 @@ def test_hold_actuate_expert_pins_one_ring_and_pushes_the_other():
 def test_knife_arms_keep_their_wrists_apart():
     """On arms the waiting hand's wrist met the pusher's over the knife, and the released
     pusher, hovering there, met the other arm reaching in to pinch (docs/embodiments.md)."""
-    env = make_env("SlideUtilityKnife", "bimanual_fr3_sharpa", num_envs=1, seed=1000, nthread=1)
-    env.reset()
-    expert = make_expert(env)
-    expert.reset(torch.arange(1))
+    env, expert = _with_expert("SlideUtilityKnife", "bimanual_fr3_sharpa", 1, 1000, nthread=1)
     model = env.scene.model
     data = mujoco.MjData(model)
     side = [model.body(model.geom_bodyid[g]).name.split("/")[0] for g in range(model.ngeom)]
@@ -114,16 +123,8 @@ def test_knife_arms_keep_their_wrists_apart():
 def test_stapler_pusher_starts_when_the_holding_wrist_meets_the_table():
     """On arms Shadow's holding forearm meets the table first and rests its finger tips
     ~2.5 cm over the hinge block: the pusher waited on them for the whole episode."""
-    env = make_env("OpenStapler", "bimanual_fr3_shadow", num_envs=1, seed=0, nthread=1)
-    env.reset()
-    expert = make_expert(env)
-    expert.reset(torch.arange(1))
-    solved = torch.zeros(1, dtype=torch.bool)
-    for _ in range(300):  # the expert needs ~220 of the 480 steps
-        _, _, terminated, _, _ = env.step(expert.act())
-        solved |= terminated
-        if solved.all():
-            break
+    env, expert = _with_expert("OpenStapler", "bimanual_fr3_shadow", 1, 0, nthread=1)
+    solved = _run_until_solved(env, expert, 300)  # the expert needs ~220 of the 480 steps
     assert expert.stage[0] > 0, "the pusher goes in once the holder has come to rest"
     assert solved.all()
 
@@ -135,17 +136,9 @@ def test_stapler_thick_finger_tips_wedge_under_the_lip():
     17 mm ones meet its corner steeply enough to lift it: both aim at the point."""
     for hand in ("shadow", "inspire"):
         assert wedge_depth(fingertip_thickness(hand, "right"), 0.008) == 0.0, hand
-    env = make_env("OpenStapler", "bimanual_floating_allegro", num_envs=1, seed=0, nthread=1)
-    env.reset()
-    expert = make_expert(env)
-    expert.reset(torch.arange(1))
+    env, expert = _with_expert("OpenStapler", "bimanual_floating_allegro", 1, 0, nthread=1)
     assert 0.005 < expert.into[0] < 0.015
-    solved = torch.zeros(1, dtype=torch.bool)
-    for _ in range(300):  # the expert needs ~210 of the 480 steps
-        _, _, terminated, _, _ = env.step(expert.act())
-        solved |= terminated
-        if solved.all():
-            break
+    solved = _run_until_solved(env, expert, 300)  # the expert needs ~210 of the 480 steps
     assert solved.all()
 
 
@@ -154,19 +147,11 @@ def test_folder_flap_lifted_by_a_staggered_finger_row():
     its 25 mm tips the row stood 43 mm tall under the flap's 43 mm high edge, the index
     tip's back met the edge from above and pressed the flap shut (0 of 20). Rolled level
     about the fingers, the row fits under it and lifts it."""
-    env = make_env("OpenFlatFolder", "bimanual_floating_leap", num_envs=1, seed=0, nthread=1)
-    env.reset()
-    expert = make_expert(env)
-    expert.reset(torch.arange(1))
+    env, expert = _with_expert("OpenFlatFolder", "bimanual_floating_leap", 1, 0, nthread=1)
     _, _, tips = tips_in_palm_frame(env, expert._palm, expert._tips)
     level = np.einsum("nij,nkj->nki", expert.roll, tips)
     assert np.ptp(tips[0, :, 2]) > 0.01
     assert np.ptp(level[0, :, 2]) < 1e-3, "the row lies in the palm plane"
     assert np.allclose(level_row(np.array([[[0.1, -0.02, 0.0], [0.1, 0.02, 0.0]]])), np.eye(3))
-    solved = torch.zeros(1, dtype=torch.bool)
-    for _ in range(340):  # the expert needs ~310 of the 480 steps
-        _, _, terminated, _, _ = env.step(expert.act())
-        solved |= terminated
-        if solved.all():
-            break
+    solved = _run_until_solved(env, expert, 340)  # the expert needs ~310 of the 480 steps
     assert solved.all()
