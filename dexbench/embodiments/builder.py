@@ -284,7 +284,8 @@ def _palm_home(name: EmbodimentName, side: str,
     return (HOME_PALM_X + dx, y + dy, HOME_PALM_Z + dz)
 
 
-def _set_joints(model: mujoco.MjModel, data: mujoco.MjData, values: dict[str, float]) -> None:
+def set_joints(model: mujoco.MjModel, data: mujoco.MjData, values: dict[str, float]) -> None:
+    """Write named joints' positions into `data.qpos`."""
     for joint, q in values.items():
         data.qpos[model.joint(joint).qposadr[0]] = q
 
@@ -297,7 +298,7 @@ def _arm_only(arm: str, hand: str, side: str, home: dict[str, float] | None
     layout = _add_arm_side(spec, arm, hand, side, DEFAULT_HOME_PALM, home)
     model = spec.compile()
     data = mujoco.MjData(model)
-    _set_joints(model, data, layout.home_qpos)
+    set_joints(model, data, layout.home_qpos)
     return model, data, layout
 
 
@@ -387,6 +388,6 @@ def robot_at_home(embodiment: str, workspace: tuple[float, float, float] = DEFAU
     model = spec.compile()
     data = mujoco.MjData(model)
     for layout in plan.sides.values():
-        _set_joints(model, data, layout.home_qpos)
+        set_joints(model, data, layout.home_qpos)
     mujoco.mj_kinematics(model, data)
     return model, data, plan

@@ -14,6 +14,7 @@ import mujoco
 import numpy as np
 import torch
 
+from dexbench.embodiments.builder import set_joints
 from dexbench.embodiments.ik import (
     POS_TOL,
     ROT_TOL,
@@ -171,8 +172,7 @@ class ActionAdapter:
         part = [g for b in subtree(model, root) if model.body_weldid[b] == model.body_weldid[root]
                 for g in self._collidable(b)]
         data.qpos[:] = model.qpos0
-        for joint, q in self.env.embodiment.sides[side].home_qpos.items():
-            data.qpos[model.joint(joint).qposadr[0]] = q
+        set_joints(model, data, self.env.embodiment.sides[side].home_qpos)
         mujoco.mj_kinematics(model, data)
         fromto = np.zeros(6)
         return tuple((a, b) for a in links for b in part if self._collide(a, b)
