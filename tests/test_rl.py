@@ -151,6 +151,23 @@ def test_ppo_smoke_run_and_rl_policy(tmp_path, monkeypatch):
     assert step[:, mount].max() <= meta["action_scale"] / 2 + 1e-6
 
 
+def test_ppo_on_the_cpu_backend_repeats_exactly(tmp_path, monkeypatch):
+    """Same seed + config on the CPU backend: the same curve and the same weights (the warp
+    backend does not promise this: docs/performance.md, determinism on the GPU)."""
+    runs = []
+    for name in ("a", "b"):
+        monkeypatch.setenv("DEXBENCH_RUNS_DIR", str(tmp_path / name))
+        train(["sim.backend=cpu", "num_envs=4", "sim.nthread=1", "rl.max_iterations=2",
+               "rl.chunk=1", "rl.network.hidden_dims=[32,32]", "seed=3"])
+        runs.append(next((tmp_path / name / "rl").iterdir()))
+    curves = [[json.loads(line)["mean_reward"] for line in (r / "curve.jsonl").open()]
+              for r in runs]
+    assert curves[0] == curves[1] and len(curves[0]) == 2
+    weights = [torch.load(r / "model_1.pt", weights_only=False)["actor_state_dict"]
+               for r in runs]
+    assert all(torch.equal(weights[0][k], weights[1][k]) for k in weights[0])
+
+
 def test_rl_checkpoint_errors_say_what_to_pass(tmp_path):
     with pytest.raises(rl_policy.CheckpointError, match="checkpoint="):
         rl_policy.spec(None, {})
