@@ -76,6 +76,12 @@ def test_pick_expert_on_arm_mounted_leap(embodiment, seed):
     assert solved >= 3, f"PickCube on {embodiment}: expert solved {solved}/4"
 
 
+def test_wuji_holds_the_pan_handle_on_its_own_diagonal():
+    """`HandSpec.bar_yaw`: square across the handle (0) the Wuji hand solves none of these
+    four GraspPan episodes; turned -0.7 rad it solves all four."""
+    assert _solved("GraspPan", "floating_wuji", seed=1, enough=4) == 4
+
+
 def test_lid_lifted_off_soft_finger_tips():
     """OpenLaptop's pads go past the lid's edge (`TurnPlan.under`): resting on the tips,
     Wuji's soft fingers bent under the lid and lifted it in none of these 4."""

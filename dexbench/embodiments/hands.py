@@ -366,6 +366,8 @@ HANDS: dict[str, HandSpec] = {
         name="wuji",
         retarget=RetargetSpec(scale=1.0),
         grasp_offset=(0.105, -0.022, 0.03),
+        # GraspPan, floating: 0 -> 7 of 8 episodes at -0.6 and -0.7 (0.1 rad grid, -1.2..0.8)
+        bar_yaw=-0.7,
         collection="wuji_hand",
         sides={"right": _wuji_side("right"), "left": _wuji_side("left")},
         synergies={
