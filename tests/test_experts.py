@@ -82,6 +82,12 @@ def test_wuji_holds_the_pan_handle_on_its_own_diagonal():
     assert _solved("GraspPan", "floating_wuji", seed=1, enough=4) == 4
 
 
+def test_sharpa_takes_the_cup_by_its_rim_at_its_own_place():
+    """`HandSpec.shifts["rim"]`: at the Shadow hand's place on the rim the Sharpa hand
+    retrieves none of these four cups; 3 cm back along its fingers, all four."""
+    assert _solved("RetrieveCup", "floating_sharpa", seed=1, enough=4) == 4
+
+
 def test_lid_lifted_off_soft_finger_tips():
     """OpenLaptop's pads go past the lid's edge (`TurnPlan.under`): resting on the tips,
     Wuji's soft fingers bent under the lid and lifted it in none of these 4."""

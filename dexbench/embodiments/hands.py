@@ -64,15 +64,21 @@ class HandSpec:
     best turns from square to the fingers, for `power` to hold it against a heavy end's
     twist: the fingers' lengths and spread differ per hand, so the line they wrap firmest
     does too. Searched on GraspPan's handle (0.1 rad steps); 0: not searched."""
-    vessel_shift: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    """Added (m, hand frame) to the `shift` of a pour's side grasp round a vessel's body:
-    the plans' shifts are the Shadow hand's, and a hand with a thicker palm or longer
-    fingers would start inside the vessel or hold it out of its fingers' hook."""
+    shifts: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    """Added (m, hand frame) to the `shift` of a plan's grasp whose `hand_shift` names the
+    key. The plans' shifts are the Shadow hand's; another hand's palm and fingers may
+    put the same kind of grasp elsewhere on the object. `vessel`: a pour's side grasp
+    round a vessel's body (a thicker palm or longer fingers start inside the vessel or
+    hold it out of their hook); `rim`: a top grasp across a cup's rim."""
     vessel_turn: float = 0.0
     """Added (rad) to a pour's `grasp_turn` (about the palm normal) for a side grasp round a
     vessel's body: a hand whose fingers lie far apart reaches the rim with its middle
     finger while its lowest finger rests on the table, unless its fingers slant down."""
     retarget: RetargetSpec = RetargetSpec()
+
+    def shift_for(self, kind: str | None) -> tuple[float, float, float]:
+        """This hand's correction (`shifts`) to grasps of `kind`; none for None."""
+        return self.shifts.get(kind, (0.0, 0.0, 0.0)) if kind else (0.0, 0.0, 0.0)
 
 
 def _shadow_side(p: str) -> HandSide:
@@ -230,7 +236,7 @@ HANDS: dict[str, HandSpec] = {
         # slanted 0.15 rad down: searched on GraspCup (30 random candidates on 4 envs,
         # then 14 near the best on 6 others); 10 episodes each, GraspCup 0.1 -> 0.5,
         # FunctionalPourCan 0 -> 0.5, FunctionalPourMug 0 -> 0.4 (GraspBleach stays 0).
-        vessel_shift=(0.01, 0.01, 0.03),
+        shifts={"vessel": (0.01, 0.01, 0.03)},
         vessel_turn=-0.15,
         collection="leap_hand",
         sides={"right": _leap_side("right_hand"), "left": _leap_side("left_hand")},
@@ -286,6 +292,10 @@ HANDS: dict[str, HandSpec] = {
         retarget=RetargetSpec(scale=1.07),
         grasp_offset=(0.097, -0.001, 0.0675),
         bar_yaw=-0.4,
+        # RetrieveCup (the rim): at the Shadow hand's place its fingers close on the rim's
+        # far edge and the cup swings out; 3 cm back along the fingers they pinch the wall.
+        # Searched on 6 episodes (0.02 m grid): floating 1/6 -> 6/6, fr3 and ur10e 6/6.
+        shifts={"rim": (-0.03, 0.0, 0.0)},
         collection="sharpa_wave",
         sides={"right": _sharpa_side("right"), "left": _sharpa_side("left")},
         synergies={

@@ -135,7 +135,9 @@ class GraspExpert:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env, commanded_hand=plan.commanded_hand)
         self.synergy = squeezed(self.adapter, env, plan.synergy, plan.squeeze)
-        self.offset = np.asarray(env.embodiment.hand.grasp_offset) + np.asarray(plan.shift)
+        hand = env.embodiment.hand
+        self.offset = (np.asarray(hand.grasp_offset) + np.asarray(plan.shift)
+                       + np.asarray(hand.shift_for(plan.hand_shift)))
         objects = env.task.objects
         self.body, self.point = locate(objects, plan.obj, plan.point)
         self.goal_body, self.goal_point = locate(objects, plan.obj, plan.goal_point)

@@ -11,8 +11,8 @@ wrist that turn is the innermost hinge alone, so it never runs into the outer hi
 The side grasp holds the vessel no lower in the hand than keeps the open fingers (from
 the hand's own geometry) above the table, so a broad hand (LEAP) is not stopped by the
 table short of the vessel; hands as narrow as the Shadow hand keep their plan. A hand
-whose size the plans' body grasp does not fit moves it by its own `HandSpec.vessel_shift`
-and `vessel_turn` (LEAP's).
+whose size the plans' body grasp (`hand_shift="vessel"`) does not fit moves it by its own
+`HandSpec.shifts["vessel"]` and `vessel_turn` (LEAP's).
 
 A round vessel (`PourPlan.round_body`) may be held from any side: a hand on an arm that
 grossly misses the plan's handshake grasp or its pour (the xArm7's reach with the Shadow
@@ -66,14 +66,14 @@ class PourExpert:
 
     def __init__(self, env: DexEnv, plan: PourPlan, side: str = "right") -> None:
         self.plan = plan
-        self.grasp = GraspExpert(env, dataclasses.replace(plan.grasp, synergy=SQUEEZE,
-                                                          standoff=None), side)
+        # the hand's own shift comes after the table clearance below, so not from here
+        self.grasp = GraspExpert(env, dataclasses.replace(
+            plan.grasp, synergy=SQUEEZE, standoff=None, hand_shift=None), side)
         self.grasp.offset[1] = max(self.grasp.offset[1], _table_clearance(env, plan, side))
         hand = env.embodiment.hand
+        self.grasp.offset += np.asarray(hand.shift_for(plan.grasp.hand_shift))
         # A hand's own side grasp round a vessel's body (a handle's grasp sets a standoff).
-        body = plan.grasp.side and plan.grasp.standoff is None
-        if body:
-            self.grasp.offset += np.asarray(hand.vessel_shift)
+        body = plan.grasp.hand_shift == "vessel"
         if plan.grasp.standoff is not None:  # from where the hand clears the table
             self.grasp.offset[2] += stand_off(self.grasp, plan.grasp.standoff)
         self._held_rot = self.grasp.grasp_rot.copy()

@@ -33,7 +33,8 @@ def body_pour(vessel: str, outlet: str) -> PourPlan:
     Round, it may be held from any side (an arm's reach: `PourPlan.round_body`)."""
     return PourPlan(
         GraspPlan(vessel, point=(0.0, 0.0, 0.04), shift=(0.0, 0.0, -0.015), yaw="none",
-                  side=True, synergy="hook", target=task_goal, goal_point=outlet),
+                  side=True, synergy="hook", target=task_goal, goal_point=outlet,
+                  hand_shift="vessel"),
         tilt=2.0, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17, overrides=KEEP_OFF_RIM,
         round_body=True)
 
@@ -59,7 +60,7 @@ class FunctionalPourMug(PourTask):
     expert = PourPlan(
         GraspPlan("mug", point=(0.0, 0.0, 0.045), shift=(-0.01, 0.0, -0.015), yaw="body",
                   yaw_offset=handle_between("mug", -0.3, 1.25 * math.pi), side=True,
-                  synergy="hook", target=task_goal, goal_point="rim"),
+                  synergy="hook", target=task_goal, goal_point="rim", hand_shift="vessel"),
         tilt=1.75, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17,
         overrides=KEEP_OFF_RIM, tip=110.0, further=0.35)
 
@@ -135,7 +136,8 @@ class GraspBleach(PourTask):
     # the fingers (by trial: 5 mm nearer the palm, the Sharpa hand loses it mid-pour).
     expert = PourPlan(
         GraspPlan("bleach", point="centre", shift=(-0.005, 0.0, -0.015), yaw="body",
-                  side=True, synergy="power", target=task_goal, goal_point="nozzle"),
+                  side=True, synergy="power", target=task_goal, goal_point="nozzle",
+                  hand_shift="vessel"),
         tilt=2.0, turn_rate=0.8, squeeze=2.0,
         overrides=(*KEEP_OFF_RIM, (r"THJ[123]$", 0.0)), open_overrides=THUMB_BACK)
 

@@ -36,7 +36,7 @@ class PourWineGlass(PourTask):
     # on the way, and the episode ends there.
     expert = PourPlan(
         GraspPlan("glass", point=("stem", (0.0, 0.0, 0.02)), shift=(0.0, 0.0, -0.02),
-                  yaw="none", side=True),
+                  yaw="none", side=True, hand_shift="vessel"),
         tilt=2.7, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:

@@ -109,7 +109,7 @@ class RetrieveCup(TabletopTask):
     placements: ClassVar = {"rack": Placement((0.05, 0.15), (0.10, 0.35), (-0.3, 0.3))}
     attached: ClassVar = {"cup": ("rack", "slot")}
     max_tilt, tolerance = 15.0, 0.04
-    expert = GraspPlan("cup", point=("rim", (0.0, 0.0, -0.025)), yaw="none",
+    expert = GraspPlan("cup", point=("rim", (0.0, 0.0, -0.025)), yaw="none", hand_shift="rim",
                        target=_out_of_rack, goal_point=("bottom", (0.0, 0.0, -0.003)),
                        release=True)
 

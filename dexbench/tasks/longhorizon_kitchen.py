@@ -392,7 +392,7 @@ CAN_POUR = dataclasses.replace(
 BOTTLE_POUR = PourPlan(
     GraspPlan("bottle", point=(0.0, 0.0, 0.07), shift=(0.0, 0.0, -0.015), yaw="none",
               yaw_offset=-math.pi / 2, side=True, synergy="power", target=task_goal,
-              goal_point="top"),
+              goal_point="top", hand_shift="vessel"),
     tilt=2.0, turn_rate=1.5, squeeze=2.0, grasp_turn=0.17)
 POUR_HIGHER = 0.08  # m: an outlet over the pot's mouth (the fingers below clear the rim)
 CAN_PARK = (-0.22, -0.08, 0.0)  # m from its reset spot: towards the robot, off every path

@@ -99,7 +99,9 @@ class GraspPlan:
     the fingers close `squeeze` times as far as `synergy` (within the actuators' ranges):
     a firmer hold on a thin or heavy-ended handle. With `standoff` (m) the grasp moves
     along the palm normal until the open hand stands that far clear of the object (each
-    hand by its own size); without, `shift` alone places it.
+    hand by its own size); without, `shift` alone places it. `hand_shift` names the
+    kind of grasp for which a hand adds its own correction to `shift`
+    (`HandSpec.shifts`: "vessel", "rim"): the plans' shifts are the Shadow hand's.
     After the grasp the object is lifted `lift` metres, or, with `target(env) -> (N, 3)`,
     carried until its `goal_point` is there; with `release`, the hand then opens and
     backs off (placing), as it does whenever `let_go(env) -> (N,) bool` holds while
@@ -139,6 +141,7 @@ class GraspPlan:
     commanded_hand: bool = False
     arrive: float | None = None
     carry_speed: float | None = None
+    hand_shift: str | None = None
 
 
 @dataclass(frozen=True)
