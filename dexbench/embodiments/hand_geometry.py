@@ -67,6 +67,15 @@ def synergy_targets(
     return np.clip(out, ranges[:, 0], ranges[:, 1])
 
 
+def _standalone(spec: mujoco.MjSpec) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """Compile a hand model for the gravity-free 2 ms simulation its measurements use."""
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    spec.option.timestep = 0.002
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    model = spec.compile()
+    return model, mujoco.MjData(model)
+
+
 def _settle(model: mujoco.MjModel, data: mujoco.MjData, ctrl: np.ndarray) -> None:
     """Drive the hand to `ctrl` from rest until it stops moving (at most 4 s)."""
     mujoco.mj_resetData(model, data)
@@ -82,12 +91,7 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
     """Measure one hand side by closing it in a gravity-free standalone simulation."""
     hand = HANDS[hand_name]
     parts = hand.sides[side]
-    spec = hand_model_spec(hand, side)
-    spec.option.gravity = [0.0, 0.0, 0.0]
-    spec.option.timestep = 0.002
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    model = spec.compile()
-    data = mujoco.MjData(model)
+    model, data = _standalone(hand_model_spec(hand, side))
     names = tuple(model.actuator(i).name for i in range(model.nu))
     ranges = model.actuator_ctrlrange.copy()
     zero = np.zeros(model.nu)
@@ -202,11 +206,7 @@ def fingertip_thickness(hand_name: str, side: str) -> float:
         spec.worldbody.add_geom(name=f"thickness_{sign:+.0f}", type=mujoco.mjtGeom.mjGEOM_PLANE,
                                 size=[1.0, 1.0, 0.01], contype=0, conaffinity=0,
                                 pos=(geo.frame_pos - sign * normal).tolist(), quat=quat.tolist())
-    spec.option.gravity = [0.0, 0.0, 0.0]
-    spec.option.timestep = 0.002
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    model = spec.compile()
-    data = mujoco.MjData(model)
+    model, data = _standalone(spec)
     _settle(model, data, geo.synergies["open"])
     planes = [model.geom(f"thickness_{s:+.0f}").id for s in (1.0, -1.0)]
     fromto = np.zeros(6)

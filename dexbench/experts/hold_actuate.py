@@ -130,7 +130,11 @@ class HoldActuateExpert:
         self.pads = np.zeros((n, 3))  # finger pads in the hand frame
         self.roll = eye.copy()  # levels the finger row under an edge: `level_row`
         self.into = np.zeros(n)  # m the pads aim past the point, towards the hinge
-        self._tip = fingertip_thickness(env.embodiment.hand.name, plan.side)
+        # fingers under an edge lifting a hinged part: their row is levelled and tips too
+        # thick for the gap aim further in (measured once per hand, only for these plans)
+        self._under_edge = plan.yaw is not None and not self._slide
+        self._tip = (fingertip_thickness(env.embodiment.hand.name, plan.side)
+                     if self._under_edge else 0.0)
         self.stage = np.zeros(n, dtype=np.int64)  # hover, beside, on, push, done
         self.away = np.zeros(n, dtype=bool)  # released: back at the hover point
         self.started = np.zeros(n, dtype=bool)  # the other hand runs `then`
@@ -144,7 +148,7 @@ class HoldActuateExpert:
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pads[ids] = tips[ids].mean(axis=1)
-        if self.plan.yaw is not None and not self._slide:
+        if self._under_edge:
             self.roll[ids] = level_row(tips[ids])
             height = self.env.view.point_pos(self.body, self.local).cpu().numpy()[ids, 2]
             self.into[ids] = wedge_depth(self._tip, height - TABLE_TOP_Z)

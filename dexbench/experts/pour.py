@@ -72,7 +72,7 @@ class PourExpert:
         self.grasp.offset[1] = max(self.grasp.offset[1], _table_clearance(env, plan, side))
         hand = env.embodiment.hand
         self.grasp.offset += np.asarray(hand.shift_for(plan.grasp.hand_shift))
-        # A hand's own side grasp round a vessel's body (a handle's grasp sets a standoff).
+        # a side grasp round a vessel's body: the hand's `vessel_turn` applies too
         body = plan.grasp.hand_shift == "vessel"
         if plan.grasp.standoff is not None:  # from where the hand clears the table
             self.grasp.offset[2] += stand_off(self.grasp, plan.grasp.standoff)
