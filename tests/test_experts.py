@@ -88,6 +88,23 @@ def test_sharpa_takes_the_cup_by_its_rim_at_its_own_place():
     assert _solved("RetrieveCup", "floating_sharpa", seed=1, enough=4) == 4
 
 
+def test_push_expert_leans_the_fingers_where_the_arm_cannot_hang_them():
+    """PushT on the FR3: with the fingers straight down the arm missed the far pushes by
+    ~10 cm (1 of these 4 solved); leaning them out where it cannot reach (`LEANS`), 4."""
+    keys = eval_keys(0, [0, 2, 6, 7])
+    solved = _solved("PushT", "fr3_shadow", seed=0, enough=3, keys=keys)
+    assert solved >= 3, f"PushT on fr3_shadow: expert solved {solved}/4"
+
+
+def test_strike_presses_deeper_where_the_wrist_is_soft():
+    """FunctionalHammerStrike on the UR10e: presses of the floating wrist's depth drove the
+    nail ~4 mm each and none of these 4 was home in time; deepened after each slow press
+    (`strike.DEEPER`), 3 of 4."""
+    keys = eval_keys(0, [0, 1, 2, 3])
+    solved = _solved("FunctionalHammerStrike", "ur10e_shadow", seed=0, enough=3, keys=keys)
+    assert solved >= 3, f"HammerStrike on ur10e_shadow: expert solved {solved}/4"
+
+
 def test_lid_lifted_off_soft_finger_tips():
     """OpenLaptop's pads go past the lid's edge (`TurnPlan.under`): resting on the tips,
     Wuji's soft fingers bent under the lid and lifted it in none of these 4."""

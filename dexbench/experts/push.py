@@ -54,6 +54,12 @@ LIFT_DETOUR = 0.4  # m of extra travel a detour over the block counts as (rise, 
 BAN_SECONDS = 1.0  # a stuck push's contact is left out of the choice this long
 ROW_TILT = 0.25  # rad the fingertip row tilts, leading fingertip down: the others clear
 MAX_YAW = 0.9 * np.pi  # a floating wrist's yaw joint stops at +-pi
+MARGIN = 1.0  # an arm's push may be missed this much more than the best turn's
+# (`ActionAdapter.reach_cost`: 1 = the IK's position or orientation tolerance)
+HANG = np.pi / 2  # rad the fingers pitch down from level: straight down
+# An arm may lean the hanging fingers out by up to this much where it cannot reach the
+# push with them straight down (far from its base, its wrist at a limit).
+LEANS = (0.0, 0.35, -0.35, 0.7, -0.7)
 
 
 class Stage:
@@ -100,6 +106,8 @@ class PushExpert:
     def __init__(self, env: DexEnv, plan: PushPlan, side: str = "right") -> None:
         self.env, self.plan, self.side = env, plan, side
         self.adapter = ActionAdapter(env)
+        self._arm = env.embodiment.mount != "floating"
+        self._leans = np.array(LEANS if self._arm else LEANS[:1])
         self._palm, self._tips = palm_and_finger_sites(env, side)
         self.rects = np.asarray(plan.rects, dtype=float)
         self.points, self.pushes = outline(self.rects)
@@ -108,7 +116,7 @@ class PushExpert:
         second = areas * ((self.rects[:, 2] ** 2 + self.rects[:, 3] ** 2) / 3 + (
             (self.rects[:, :2] - self.centroid) ** 2).sum(1))
         self.gyration2 = second.sum() / areas.sum()  # m^2
-        hanging = palm_down(np.zeros(1)) @ pitch_down(np.pi / 2)
+        hanging = palm_down(np.zeros(1)) @ pitch_down(HANG)
         self._row_yaw = float(np.arctan2(hanging[0, 1, 1], hanging[0, 0, 1]))
         n = env.num_envs
         self.tip = np.zeros((n, 3))  # commanded leading fingertip (world)
@@ -125,6 +133,7 @@ class PushExpert:
         self.banned = np.zeros(n, dtype=np.int64)  # candidate whose push got stuck
         self.ban_timer = np.zeros(n)
         self.tilt = np.zeros(n)
+        self.lean = np.zeros(n)  # rad the fingers lean out of straight down (arms only)
         self.drop = np.zeros(n)  # m the leading fingertip is above the lowest one
 
     def reset(self, env_ids: torch.Tensor) -> None:
@@ -149,7 +158,7 @@ class PushExpert:
             self._plan(planning)
         low = TABLE_TOP_Z + LOW
         high = TABLE_TOP_Z + self.plan.height + CLEAR
-        target_rot = self._hanging(self.yaw, self.tilt)
+        target_rot = self._hanging(self.yaw, self.tilt, self.lean)
         # Turning about a low fingertip would sweep the other fingers over the table.
         hold = (self.stage == Stage.RISE) & (self.tip[:, 2] < high - ARRIVED)
         target_rot[hold] = self.rot[hold]
@@ -175,7 +184,7 @@ class PushExpert:
         speed[push] = np.clip((self.length - ahead)[push] / SLOW_DOWN, MIN_PUSH_SPEED, PUSH_SPEED)
         self.timer[push] += self.env.control_dt
         target[self.stage == Stage.DONE, 2] = high
-        turned = self._turn(self._hanging(self.yaw, self.tilt)) < 0.05
+        turned = self._turn(self._hanging(self.yaw, self.tilt, self.lean)) < 0.05
         self.tip, self.rot = step_towards(self.tip, self.rot, target, target_rot,
                                           (speed * self.env.control_dt)[:, None],
                                           TURN_RATE * self.env.control_dt)
@@ -252,43 +261,75 @@ class PushExpert:
         return ((centre - goal_centre) ** 2).sum(-1) + (YAW_WEIGHT * wrap(yaw - goal_yaw)) ** 2
 
     def _face(self, ids: np.ndarray, d: np.ndarray) -> None:
-        """Turn the fingertip row along pushes `d` (n, 2), the nearer of its two yaws;
-        the fingertip ahead along the push leads."""
+        """Turn the fingertip row along pushes `d` (n, 2), the nearer of its two yaws,
+        tilted the way that drops its leading fingertip (the one ahead along the push)
+        least. On an arm, only among the turns and leans whose push the arm can take
+        (`ActionAdapter.reach_cost` within `MARGIN` of the best), the least lean first: a
+        wrist at its limit leaves the fingertip far from the line it meant to push along."""
         along = np.arctan2(d[:, 1], d[:, 0]) - self._row_yaw
         options = np.stack([wrap(along), wrap(along + np.pi)], axis=1)
+        tilts = np.array([ROW_TILT, -ROW_TILT])
         far = np.abs(wrap(options - self.yaw[ids, None]))
         far[np.abs(options) > MAX_YAW] = np.inf
-        self.yaw[ids] = options[np.arange(len(ids)), far.argmin(axis=1)]
         push = np.column_stack([d, np.zeros(len(ids))])
         rows = np.arange(len(ids))
-        best = None
-        for tilt in (ROW_TILT, -ROW_TILT):
-            tips = np.einsum("nij,nkj->nki", self._hanging(self.yaw[ids], np.full(len(ids), tilt)),
-                             self.offsets[ids])
-            lead = (tips @ push[:, :, None])[..., 0].argmax(axis=1)
-            drop = tips[rows, lead, 2] - tips[..., 2].min(axis=1)
-            if best is None:
-                best = (np.full(len(ids), tilt), lead, drop)
-            else:
-                better = drop < best[2]
-                best = tuple(np.where(better, new, old) for new, old in zip(
-                    (np.full(len(ids), tilt), lead, drop), best, strict=True))
-        tilt, lead, self.drop[ids] = best
-        self.tilt[ids] = tilt
+        shape = (len(ids), 2, len(tilts), len(self._leans))
+        leads, drops = np.zeros(shape, dtype=np.int64), np.zeros(shape)
+        for j, k, m in np.ndindex(shape[1:]):
+            tips = np.einsum("nij,nkj->nki", self._hanging(
+                options[:, j], np.full(len(ids), tilts[k]), np.full(len(ids), self._leans[m])),
+                self.offsets[ids])
+            leads[:, j, k, m] = (tips @ push[:, :, None])[..., 0].argmax(axis=1)
+            drops[:, j, k, m] = tips[rows, leads[:, j, k, m], 2] - tips[..., 2].min(axis=1)
+        # the yaw's distance first, then the lean, then the drop (floating: no leans)
+        rank = (far[:, :, None, None] * 1e3 + np.abs(self._leans) * 10.0 + drops)
+        if self._arm:
+            cost = self._reach(ids, options, tilts, leads, drops)
+            cost[np.broadcast_to(np.isinf(far)[:, :, None, None], shape)] = np.inf
+            best = cost.reshape(len(ids), -1).min(axis=1)[:, None, None, None]
+            rank = rank + np.where(cost <= best + MARGIN, 0.0, np.inf)
+        best = rank.reshape(len(ids), -1).argmin(axis=1)
+        j, k, m = np.unravel_index(best, shape[1:])
+        self.yaw[ids] = options[rows, j]
+        self.tilt[ids] = tilts[k]
+        self.lean[ids] = self._leans[m]
+        self.drop[ids] = drops[rows, j, k, m]
+        lead = leads[rows, j, k, m]
         palm = self.tip[ids] - np.einsum("nij,nj->ni", self.rot[ids],
                                          self.offsets[ids, self.lead[ids]])
         self.lead[ids] = lead
         self.tip[ids] = palm + np.einsum("nij,nj->ni", self.rot[ids],
                                          self.offsets[ids, lead])
 
+    def _reach(self, ids: np.ndarray, options: np.ndarray, tilts: np.ndarray,
+               leads: np.ndarray, drops: np.ndarray) -> np.ndarray:
+        """(n, yaw, tilt, lean) how badly the arm misses the push (its start and end palm
+        poses) with each yaw option, tilt and lean (`ActionAdapter.reach_cost`)."""
+        low = TABLE_TOP_Z + LOW
+        cost = np.zeros(leads.shape)
+        for r, i in enumerate(ids):
+            for j, k, m in np.ndindex(leads.shape[1:]):
+                rot = self._hanging(options[r:r + 1, j], tilts[k:k + 1], self._leans[m:m + 1])[0]
+                start = self.start[i].copy()
+                start[2] = low + drops[r, j, k, m]
+                end = start + self.direction[i] * self.length[i]
+                offset = rot @ self.offsets[i, leads[r, j, k, m]]
+                cost[r, j, k, m] = self.adapter.reach_cost(
+                    self.side, int(i), [(start - offset, rot), (end - offset, rot)])
+        return cost
+
     @staticmethod
-    def _hanging(yaw: np.ndarray, tilt: np.ndarray) -> np.ndarray:
-        """(N, 3, 3) hand frames, fingers down, turned `yaw` about world z and the
-        fingertip row tilted `tilt` (rad) about the palm normal."""
+    def _hanging(yaw: np.ndarray, tilt: np.ndarray, lean: np.ndarray | None = None
+                 ) -> np.ndarray:
+        """(N, 3, 3) hand frames, fingers down (leaning `lean` rad, default none, out
+        of vertical), turned `yaw` about world z and the fingertip row tilted `tilt` (rad)
+        about the palm normal."""
+        lean = np.zeros(len(tilt)) if lean is None else lean
         c, s = np.cos(tilt), np.sin(tilt)
         roll = np.zeros((len(tilt), 3, 3))
         roll[:, 0, 0], roll[:, 0, 1], roll[:, 1, 0], roll[:, 1, 1], roll[:, 2, 2] = c, -s, s, c, 1
-        return palm_down(yaw) @ pitch_down(np.pi / 2) @ roll
+        pitch = np.stack([pitch_down(HANG - a) for a in lean])
+        return palm_down(yaw) @ pitch @ roll
 
     def _turn(self, target_rot: np.ndarray) -> np.ndarray:
         """Angle (rad) still to turn from the commanded to the target orientation."""

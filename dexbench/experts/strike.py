@@ -20,6 +20,10 @@ from dexbench.experts.grasp import GraspExpert
 from dexbench.tasks.plans import StrikePlan, locate
 
 ARRIVED = 0.008  # m: the face this close to its hover point starts a press
+# A press that drove the target less than `SLOW` (m) makes the next one `DEEPER` (m), up
+# to `MOST` past the hover height plus the gap: a softer mount (a long arm's wrist is
+# less stiff than the floating wrist it was tuned on) presses harder for the same drive.
+SLOW, DEEPER, MOST = 0.005, 0.01, 0.06
 
 
 class StrikeExpert:
@@ -35,6 +39,8 @@ class StrikeExpert:
         self.pressing = np.zeros(n, dtype=bool)
         self.timer = np.zeros(n)
         self.bottom = np.zeros((n, 3))  # where the palm is commanded during a press
+        self.depth = np.full(n, plan.depth)  # m the next press goes past the target
+        self.top = np.zeros(n)  # the target's height when the press began
 
     def _points(self) -> tuple[np.ndarray, np.ndarray]:
         view = self.env.view
@@ -51,6 +57,7 @@ class StrikeExpert:
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
         self.pressing[ids], self.timer[ids] = False, 0.0
+        self.depth[ids] = self.plan.depth
         self.grasp.reset(env_ids)
 
     def act(self) -> torch.Tensor:
@@ -59,11 +66,15 @@ class StrikeExpert:
         done = np.asarray(self.plan.done(self.env))
         above = np.linalg.norm(face - aim - [0.0, 0.0, self.plan.hover], axis=1) < ARRIVED
         start = carrying & above & ~self.pressing & ~done
-        drop = [0.0, 0.0, self.plan.hover + self.plan.depth]
-        self.bottom[start] = (self.grasp.pos - drop)[start]
+        self.bottom[start] = self.grasp.pos[start]
+        self.bottom[start, 2] -= self.plan.hover + self.depth[start]
+        self.top[start] = aim[start, 2]
         self.pressing |= start
         self.timer = np.where(self.pressing, self.timer + self.env.control_dt, 0.0)
+        was = self.pressing.copy()
         self.pressing &= carrying & (self.timer < self.plan.press) & ~done
+        slow = was & ~self.pressing & (self.top - aim[:, 2] < SLOW)
+        self.depth[slow] = np.minimum(self.depth[slow] + DEEPER, MOST)
         return self.grasp.act()
 
     @property
