@@ -34,6 +34,10 @@ TABLE_CLEARANCE = 0.01  # m: arm links kept above the table top
 TURN_LAG, STALL_SPEED = 0.5, 0.1
 RECHECK_SECONDS = 0.5  # a stall where neither way is clear is checked again this late
 REACH_ITERATIONS = 100  # `reach_cost`: IK iterations per pose, as the feasibility test's
+# Poses missed by at most this much more (`reach_cost`) than the least missed count as
+# good as those: the scratch IK that scores them is a guess of the adapter's, which follows
+# the way there step by step (the pour's vessel turn, the pusher's yaw, tilt and lean).
+REACH_MARGIN = 1.0
 
 
 def subtree(model: mujoco.MjModel, root: int) -> set[int]:

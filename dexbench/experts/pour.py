@@ -32,6 +32,7 @@ import torch
 from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import REACH_MARGIN
 from dexbench.experts.base import host_ids
 from dexbench.experts.grasp import (
     APPROACH_HEIGHT,
@@ -50,10 +51,6 @@ SQUEEZE = "pour_squeeze"  # the pose name this expert adds to its own adapter
 PRESS = 0.03
 # Turns (rad) about a round vessel's vertical axis its grasp may take, tried nearest first.
 TURNS = sorted(np.linspace(-np.pi, np.pi, 12, endpoint=False), key=abs)
-# A turn missed by at most this much more (`ActionAdapter.reach_cost`) than the least
-# missed counts as good as that one: the nearer turn is taken (the scratch IK that scores
-# them is a guess of the adapter's, which follows the way there step by step).
-MARGIN = 1.0
 # The plan's own turn is given up only when that guess misses it by this much (20 cm,
 # or 2.5 rad, along the way): the FR3 takes the cup's handshake grasp and pour half the
 # time where the guess misses it by up to 9.
@@ -130,7 +127,7 @@ class PourExpert:
         """Turn the fresh grasps `ids` of a round vessel about the vertical by the least
         of `TURNS` whose way in (from the hand's pose to above the grasp), grasp,
         half-way pour and finished pour (the rim at the target), taken in turn, the
-        mount misses within `MARGIN` of the best (`ActionAdapter.reach_cost`). The
+        mount misses within `REACH_MARGIN` of the best (`ActionAdapter.reach_cost`). The
         plan's own turn stays unless missed by `GROSS` or more; an arm's wrist limits may
         forbid it (the handshake grasp of a cup tipped
         115 deg over its fingertips, the Shadow forearm then pointing up)."""
@@ -157,7 +154,7 @@ class PourExpert:
                 costs.append(grasp.adapter.reach_cost(grasp.side, i, poses))
                 if costs[0] < GROSS:
                     break
-            near = min(costs) + MARGIN
+            near = min(costs) + REACH_MARGIN
             self._held_rot[i] = next(r for r, c in zip(held_rots, costs, strict=True)
                                      if c <= near)
 

@@ -20,6 +20,7 @@ from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import (
+    REACH_MARGIN,
     ActionAdapter,
     HandCommand,
     palm_and_finger_sites,
@@ -54,8 +55,6 @@ LIFT_DETOUR = 0.4  # m of extra travel a detour over the block counts as (rise, 
 BAN_SECONDS = 1.0  # a stuck push's contact is left out of the choice this long
 ROW_TILT = 0.25  # rad the fingertip row tilts, leading fingertip down: the others clear
 MAX_YAW = 0.9 * np.pi  # a floating wrist's yaw joint stops at +-pi
-MARGIN = 1.0  # an arm's push may be missed this much more than the best turn's
-# (`ActionAdapter.reach_cost`: 1 = the IK's position or orientation tolerance)
 HANG = np.pi / 2  # rad the fingers pitch down from level: straight down
 # An arm may lean the hanging fingers out by up to this much where it cannot reach the
 # push with them straight down (far from its base, its wrist at a limit).
@@ -264,7 +263,7 @@ class PushExpert:
         """Turn the fingertip row along pushes `d` (n, 2), the nearer of its two yaws,
         tilted the way that drops its leading fingertip (the one ahead along the push)
         least. On an arm, only among the turns and leans whose push the arm can take
-        (`ActionAdapter.reach_cost` within `MARGIN` of the best), the least lean first: a
+        (`ActionAdapter.reach_cost` within `REACH_MARGIN` of the best), the least lean first: a
         wrist at its limit leaves the fingertip far from the line it meant to push along."""
         along = np.arctan2(d[:, 1], d[:, 0]) - self._row_yaw
         options = np.stack([wrap(along), wrap(along + np.pi)], axis=1)
@@ -287,7 +286,7 @@ class PushExpert:
             cost = self._reach(ids, options, tilts, leads, drops)
             cost[np.broadcast_to(np.isinf(far)[:, :, None, None], shape)] = np.inf
             best = cost.reshape(len(ids), -1).min(axis=1)[:, None, None, None]
-            rank = rank + np.where(cost <= best + MARGIN, 0.0, np.inf)
+            rank = rank + np.where(cost <= best + REACH_MARGIN, 0.0, np.inf)
         best = rank.reshape(len(ids), -1).argmin(axis=1)
         j, k, m = np.unravel_index(best, shape[1:])
         self.yaw[ids] = options[rows, j]
