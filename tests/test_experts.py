@@ -105,6 +105,16 @@ def test_strike_presses_deeper_where_the_wrist_is_soft():
     assert solved >= 3, f"HammerStrike on ur10e_shadow: expert solved {solved}/4"
 
 
+def test_strike_comes_down_to_the_nail_from_above():
+    """FunctionalHammerStrike on the UR10e: carried straight at the hover point, the
+    lagging arm brought the hand level with the nail head beside it and touched it in all
+    of these 4; with the hover point raised while the face is off to the side
+    (`strike.CONE`), 4 of 4."""
+    keys = eval_keys(0, [4, 6, 7, 8])
+    solved = _solved("FunctionalHammerStrike", "ur10e_shadow", seed=0, enough=3, keys=keys)
+    assert solved >= 3, f"HammerStrike on ur10e_shadow: expert solved {solved}/4"
+
+
 def test_lid_lifted_off_soft_finger_tips():
     """OpenLaptop's pads go past the lid's edge (`TurnPlan.under`): resting on the tips,
     Wuji's soft fingers bent under the lid and lifted it in none of these 4."""

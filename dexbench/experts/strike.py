@@ -24,6 +24,11 @@ ARRIVED = 0.008  # m: the face this close to its hover point starts a press
 # to `MOST` past the hover height plus the gap: a softer mount (a long arm's wrist is
 # less stiff than the floating wrist it was tuned on) presses harder for the same drive.
 SLOW, DEEPER, MOST = 0.005, 0.01, 0.06
+# The hover point rises `CONE` m per m the face is still off to the side of the aim, so
+# the face comes down onto the target from above: a lagging arm that let the carry sink
+# as it closed in brought the hand level with the nail head beside it, and touching the
+# nail fails the task.
+CONE = 1.0
 
 
 class StrikeExpert:
@@ -51,6 +56,8 @@ class StrikeExpert:
         command at `bottom` (the carry moves the palm by the face's error)."""
         face, aim = self._points()
         hover = aim + [0.0, 0.0, self.plan.hover]
+        off = np.linalg.norm((face - aim)[:, :2], axis=1)
+        hover[:, 2] += CONE * np.maximum(off - ARRIVED, 0.0)
         press = face + self.bottom - self.grasp.pos
         return np.where(self.pressing[:, None], press, hover)
 
