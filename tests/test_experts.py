@@ -115,6 +115,15 @@ def test_strike_comes_down_to_the_nail_from_above():
     assert solved >= 3, f"HammerStrike on ur10e_shadow: expert solved {solved}/4"
 
 
+def test_wuji_holds_the_hammer_where_its_own_grip_keeps_it():
+    """FunctionalHammerStrike, floating Wuji: at the Shadow hand's grasp the lifted head
+    tipped the hammer out of the grip in all of these 4; at Wuji's own (`shifts["tool"]`),
+    4 of 4."""
+    keys = eval_keys(0, [9, 13, 14, 15])
+    solved = _solved("FunctionalHammerStrike", "floating_wuji", seed=0, enough=3, keys=keys)
+    assert solved >= 3, f"HammerStrike on floating_wuji: expert solved {solved}/4"
+
+
 def test_lid_lifted_off_soft_finger_tips():
     """OpenLaptop's pads go past the lid's edge (`TurnPlan.under`): resting on the tips,
     Wuji's soft fingers bent under the lid and lifted it in none of these 4."""

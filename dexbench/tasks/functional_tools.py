@@ -160,7 +160,7 @@ class FunctionalHammerStrike(TabletopTask):
     # arm chasing each swing flung the hammer out of the hand (fr3_shadow 0.2 -> 1.0).
     expert = StrikePlan(GraspPlan("hammer", point=("head", (-0.075, 0.0, 0.0)),
                                   shift=(0.03, 0.0, -0.045), yaw="body", yaw_offset=math.pi / 2,
-                                  squeeze=2.0, commanded_hand=True),
+                                  squeeze=2.0, commanded_hand=True, hand_shift="tool"),
                         face="face", on="board", at="nail_head", done=_nail_home,
                         hover=0.03, depth=0.02, press=1.0)
 

@@ -101,7 +101,7 @@ class GraspPlan:
     along the palm normal until the open hand stands that far clear of the object (each
     hand by its own size); without, `shift` alone places it. `hand_shift` names the
     kind of grasp for which a hand adds its own correction to `shift`
-    (`HandSpec.shifts`: "vessel", "rim"): the plans' shifts are the Shadow hand's.
+    (`HandSpec.shifts`: "vessel", "rim", "tool"): the plans' shifts are the Shadow hand's.
     After the grasp the object is lifted `lift` metres, or, with `target(env) -> (N, 3)`,
     carried until its `goal_point` is there; with `release`, the hand then opens and
     backs off (placing), as it does whenever `let_go(env) -> (N,) bool` holds while
