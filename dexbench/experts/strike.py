@@ -46,6 +46,8 @@ class StrikeExpert:
         self.bottom = np.zeros((n, 3))  # where the palm is commanded during a press
         self.depth = np.full(n, plan.depth)  # m the next press goes past the target
         self.top = np.zeros(n)  # the target's height when the press began
+        # the face and the aim this step, read once in `act` for it and `_target`
+        self._now = self._points()
 
     def _points(self) -> tuple[np.ndarray, np.ndarray]:
         view = self.env.view
@@ -54,7 +56,7 @@ class StrikeExpert:
     def _target(self, env: DexEnv) -> np.ndarray:
         """Where the face goes: above the aim, or, pressing, wherever puts the palm
         command at `bottom` (the carry moves the palm by the face's error)."""
-        face, aim = self._points()
+        face, aim = self._now
         hover = aim + [0.0, 0.0, self.plan.hover]
         off = np.linalg.norm((face - aim)[:, :2], axis=1)
         hover[:, 2] += CONE * np.maximum(off - ARRIVED, 0.0)
@@ -68,7 +70,7 @@ class StrikeExpert:
         self.grasp.reset(env_ids)
 
     def act(self) -> torch.Tensor:
-        face, aim = self._points()
+        face, aim = self._now = self._points()
         carrying = self.grasp.carrying
         done = np.asarray(self.plan.done(self.env))
         above = np.linalg.norm(face - aim - [0.0, 0.0, self.plan.hover], axis=1) < ARRIVED
