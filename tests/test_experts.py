@@ -132,6 +132,15 @@ def test_lid_lifted_off_soft_finger_tips():
     assert solved >= 3, f"OpenLaptop on Wuji: expert solved {solved}/4"
 
 
+def test_lid_reached_over_the_top():
+    """OpenLaptop on the UR10e with LEAP hands: going straight from the arm's start to the
+    low hover in front of the lid, the tilted fingers swept across the lid and pressed it
+    shut in all of these 4; over the top (`motion.via_travel`), 4 of 4."""
+    keys = eval_keys(0, [0, 4, 7, 8])
+    solved = _solved("OpenLaptop", "bimanual_ur10e_leap", seed=0, enough=3, keys=keys)
+    assert solved >= 3, f"OpenLaptop on ur10e_leap: expert solved {solved}/4"
+
+
 def _solved(task: str, embodiment: str | None, seed: int, enough: int,
             keys: np.ndarray | None = None) -> int:
     """Episodes of 4 envs the task's expert solves, stopping once `enough` are (`keys`:

@@ -22,11 +22,13 @@ from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose, subt
 from dexbench.experts.base import host_ids, phase_machine_state
 from dexbench.experts.motion import (
     HANDSHAKE_ROT,
+    TRAVEL_RISE,
     body_yaw,
     box_yaw,
     palm_down,
     pitch_down,
     step_towards,
+    via_travel,
     yawed,
 )
 from dexbench.tasks.plans import GraspPlan, LevelPlan, locate
@@ -43,7 +45,6 @@ class Phase(IntEnum):
 
 
 APPROACH_HEIGHT = 0.10  # m behind the palm of the grasp pose
-TRAVEL_RISE = 0.10  # m the hand rises from where it was before travelling across
 APPROACH_LIFT = 0.03  # m, side grasps also come in from slightly above
 SPEED = 0.45  # m/s palm speed limit in free space
 CAREFUL_SPEED = 0.2  # m/s descending onto the object and carrying it
@@ -207,10 +208,7 @@ class GraspExpert:
         # before moving across, so it sweeps nothing over: a hand leaving a drawer
         # handle would otherwise push the drawer shut.
         self.travel_z[fresh] = np.maximum(above[:, 2], self.pos[:, 2] + TRAVEL_RISE)[fresh]
-        across = np.linalg.norm((self.pos - above)[:, :2], axis=1) > 0.03
-        low = across & (self.pos[:, 2] < self.travel_z - 0.01)
-        waypoint = np.where(across[:, None], np.column_stack([
-            np.where(low[:, None], self.pos[:, :2], above[:, :2]), self.travel_z]), above)
+        waypoint, low = via_travel(self.pos, above, self.travel_z)
         target_pos[approach] = waypoint[approach]
         target_rot[approach & low] = self.rot[approach & low]
         waiting = approach & (self.timer == 0.0)

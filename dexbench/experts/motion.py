@@ -49,6 +49,22 @@ def turned(axes: np.ndarray, angle: float | np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
 
 
+TRAVEL_RISE = 0.10  # m a hand rises from where it is before travelling across
+ACROSS = 0.03  # m: a target horizontally further than this is travelled to over the top
+
+
+def via_travel(pos: np.ndarray, target: np.ndarray, travel_z: np.ndarray,
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 3) waypoints from palms at `pos` to `target` through the height `travel_z`
+    (N,): rise in place, cross at that height, come down over the target; and (N,)
+    whether each is still rising (it should not turn yet, or it sweeps what is below
+    it). A hand going straight would drag its hanging fingers across what lies between."""
+    across = np.linalg.norm((pos - target)[:, :2], axis=1) > ACROSS
+    low = across & (pos[:, 2] < travel_z - 0.01)
+    xy = np.where(low[:, None], pos[:, :2], target[:, :2])
+    return np.where(across[:, None], np.column_stack([xy, travel_z]), target), low
+
+
 def step_towards(pos: np.ndarray, rot: np.ndarray, target_pos: np.ndarray,
                  target_rot: np.ndarray, max_dist: float | np.ndarray, max_angle: float
                  ) -> tuple[np.ndarray, np.ndarray]:

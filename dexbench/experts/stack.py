@@ -30,7 +30,15 @@ from dexbench.embodiments.hand_geometry import thumb_actuators
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids, phase_machine_state
-from dexbench.experts.motion import body_yaw, palm_down, step_towards, wrap, yawed
+from dexbench.experts.motion import (
+    TRAVEL_RISE,
+    body_yaw,
+    palm_down,
+    step_towards,
+    via_travel,
+    wrap,
+    yawed,
+)
 from dexbench.tasks.plans import StackLiftPlan
 
 
@@ -57,7 +65,6 @@ SIDE_ROLL = 1.4
 SIDE_SHIFT = (0.0, -0.02, 0.0)
 SIDE_RISE = 0.01
 APPROACH_HEIGHT = 0.10  # m behind the palm of a grasp pose
-TRAVEL_RISE = 0.10  # m the hand rises before travelling across
 SPEED = 0.45  # m/s in free space
 CAREFUL_SPEED = 0.2  # m/s onto an item and carrying it
 LIFT_SPEED = 0.15  # m/s lifting the stack: well under the task's 0.5 m/s
@@ -185,14 +192,6 @@ class StackLiftExpert:
         """(N,) finger yaw of the stack's side grasp: square to its base's faces."""
         return self._heading(self.base, yaws[np.arange(len(yaws)), self.base])
 
-    def _via(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Waypoints to `target` through the travel height (rise, cross, come down), and
-        whether each env is still rising (it should not turn yet)."""
-        across = np.linalg.norm((self.pos - target)[:, :2], axis=1) > 0.03
-        low = across & (self.pos[:, 2] < self.travel_z - 0.01)
-        xy = np.where(low[:, None], self.pos[:, :2], target[:, :2])
-        return np.where(across[:, None], np.column_stack([xy, self.travel_z]), target), low
-
     def act(self) -> torch.Tensor:
         items, yaws = self._items()
         n = len(items)
@@ -211,7 +210,7 @@ class StackLiftExpert:
         self.travel_z[fresh] = np.maximum(above[:, 2], self.pos[:, 2] + TRAVEL_RISE)[fresh]
 
         reach = stage == Stage.REACH
-        waypoint, low = self._via(above)
+        waypoint, low = via_travel(self.pos, above, self.travel_z)
         target_pos[reach] = waypoint[reach]
         target_rot[reach & ~low] = self.grasp_rot[reach & ~low]
         near = np.linalg.norm(self.pos - above, axis=1) < 0.01
