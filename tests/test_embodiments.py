@@ -110,6 +110,23 @@ def test_synergies_differ(hand: str) -> None:
             assert np.abs(poses[a] - poses[b]).max() > 0.2, f"{a} and {b} barely differ"
 
 
+@pytest.mark.parametrize("hand", list(HANDS))
+def test_left_hand_frame_mirrors_the_right(hand: str) -> None:
+    """The open hand's finger tips (thumb aside) sit where the right hand's do, mirrored
+    across the hand frame's y: experts place either hand by one `grasp_offset`. LEAP's
+    left model has its palm origin 8 cm from the right's; its tips were 7 cm off."""
+    model, emb = _scene(f"bimanual_floating_{hand}")
+    data = _home_data(model, emb)
+    tips = {}
+    for side, lay in emb.sides.items():
+        palm = data.site(lay.palm_site)
+        local = (data.site_xpos[[model.site(t).id for t in lay.fingertip_sites[1:]]]
+                 - palm.xpos) @ palm.xmat.reshape(3, 3)
+        tips[side] = local.mean(axis=0)
+    gap = np.linalg.norm(tips["left"] - tips["right"] * [1.0, -1.0, 1.0])
+    assert gap < 0.005, f"left finger tips {gap * 100:.1f} cm from the right's mirror image"
+
+
 # The thumb's actuators of each hand, by name: `hook` must find exactly these itself.
 THUMB_ACTUATORS = {"shadow": r"A_TH", "allegro": r"/tha\d", "leap": r"/th_",
                    "sharpa": r"thumb", "inspire": r"thumb", "wuji": r"finger1_"}

@@ -187,9 +187,11 @@ def _attach_hand(
         child.body(body_name).add_site(name=f"tip_{body_name}", pos=offset.tolist(),
                                        size=[0.004, 0, 0], group=4)
     palm = child.body(parts.palm_body)
-    palm.add_site(name="palm", pos=[0, 0, 0], quat=geo.palm_site_quat.tolist(), group=4)
+    palm.add_site(name="palm", pos=geo.palm_site_pos.tolist(), quat=geo.palm_site_quat.tolist(),
+                  group=4)
     cam_pos, cam_rot = _wrist_camera_pose(geo.palm_site_quat)
-    palm.add_camera(name="wrist_cam", pos=cam_pos.tolist(), quat=_quat(cam_rot),
+    palm.add_camera(name="wrist_cam", pos=(geo.palm_site_pos + cam_pos).tolist(),
+                    quat=_quat(cam_rot),
                     fovy=WRIST_CAMERA_FOVY)
     root_rot = frame_rot @ geo.frame_rot.T
     root_pos = frame_pos - root_rot @ geo.frame_pos

@@ -1,9 +1,11 @@
 """Facts about a hand derived from its model, so no hand needs hand-tuned mount poses.
 
-The *hand frame* H has its origin at the palm body, x along the fingers (from the mean
-non-thumb knuckle to the mean non-thumb fingertip, hand open: knuckles rather than the
-palm origin, which some models place far off the fingers' line) and z along the palm
-normal (the way the fingers curl when the hand closes). Every mount places H, not the
+The *hand frame* H has its origin at the palm body (for a left model whose palm body
+lies elsewhere on the hand than its right model's: at the mirror image of the right's),
+x along the fingers (from the mean non-thumb knuckle to the mean non-thumb fingertip,
+hand open: knuckles rather than the palm origin, which some models place far off the
+fingers' line) and z along the palm normal (the way the fingers curl when the hand
+closes). Every mount places H, not the
 model's root, so "palm down, fingers forward" means the same thing for all six hands.
 Everything here is in the hand file's world frame, which is what `MjSpec.attach` places.
 """
@@ -18,9 +20,14 @@ import mujoco
 import numpy as np
 
 from dexbench.assets.robots import robot_spec
-from dexbench.embodiments.hands import HANDS, SYNERGIES, HandSpec
+from dexbench.embodiments.hands import HANDS, SIDES, SYNERGIES, HandSpec
 
 _MAX_SETTLE_STEPS = 2000  # 4 s at the 2 ms timestep used here
+# m: a left model whose knuckles lie further than this from the mirror image of the right
+# model's (in H) has its palm origin elsewhere on the hand; H's origin is moved to the
+# mirror of the right's (LEAP's left palm origin sits 8 cm off its right's). Closer
+# than this, the models' own asymmetry (Sharpa, Wuji: < 0.5 mm) is left alone.
+_MIRROR_TOLERANCE = 0.005
 
 
 @dataclass(frozen=True)
@@ -34,6 +41,7 @@ class HandGeometry:
     frame_rot: np.ndarray  # (3, 3) columns: H's x (fingers), y, z (palm normal)
     fingertip_offsets: tuple[np.ndarray, ...]  # per fingertip body, in its body frame
     palm_site_pos: np.ndarray  # H's origin in the palm body frame
+    knuckles: np.ndarray  # (3,) the mean non-thumb knuckle of the open hand, in H
     palm_site_quat: np.ndarray  # H's orientation in the palm body frame
     corners: np.ndarray  # (n, 3) corners of the open hand's geom bounding boxes, in H
     actuators: tuple[str, ...]  # unprefixed actuator names, model order
@@ -123,6 +131,13 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
     z = curl - curl.dot(x) * x
     z /= np.linalg.norm(z)
     rot = np.column_stack([x, np.cross(z, x), z])
+    origin = palm_pos
+    if side != SIDES[0] and SIDES[0] in hand.sides:
+        # H is right-handed on both sides, the left hand a mirror image: across y.
+        mirrored = hand_geometry(hand_name, SIDES[0]).knuckles * [1.0, -1.0, 1.0]
+        off = rot.T @ (knuckles - palm_pos) - mirrored
+        if np.linalg.norm(off) > _MIRROR_TOLERANCE:
+            origin = palm_pos + rot @ off
 
     mujoco.mj_resetData(model, data)
     mujoco.mj_kinematics(model, data)
@@ -130,12 +145,13 @@ def hand_geometry(hand_name: str, side: str) -> HandGeometry:
     site_quat = np.zeros(4)
     mujoco.mju_mat2Quat(site_quat, (palm_rot.T @ rot).ravel())
     return HandGeometry(
-        frame_pos=palm_pos,
+        frame_pos=origin,
         frame_rot=rot,
         fingertip_offsets=tuple(model.body_ipos[t].copy() for t in tips),
-        palm_site_pos=palm_rot.T @ (palm_pos - data.xpos[palm]),
+        palm_site_pos=palm_rot.T @ (origin - data.xpos[palm]),
+        knuckles=rot.T @ (knuckles - origin),
         palm_site_quat=site_quat,
-        corners=(geom_corners - palm_pos) @ rot,
+        corners=(geom_corners - origin) @ rot,
         actuators=names,
         synergies=synergies,
         open_qpos=open_qpos,

@@ -123,17 +123,22 @@ class TwoHandLiftExpert:
         ref = thumb_y.get("right", next(iter(thumb_y.values())))
         return {s: 1.0 if y * ref >= 0 else -1.0 for s, y in thumb_y.items()}
 
-    def _hang(self, side: str, env: int) -> float:
-        """How far below the palm (along the fingers) a pressing hand's grip point lies,
-        for its longest open finger to end `FLOOR_GAP` above the object's base. Read in
-        a just-reset env `env`."""
+    def _hang(self, side: str, env: int) -> tuple[float, float]:
+        """Where a pressing hand's grip point lies in the hand frame: below the palm
+        (along the fingers) for its longest open finger to end `FLOOR_GAP` above the
+        object's base, and across the hand in line with its fingers' middle (thumb aside):
+        the palm's own `grasp_offset` centres a held cube between fingers and thumb,
+        which for LEAP's is 5.5 cm to the side of the fingers, and two palms pressing off
+        the object's middle let it swing about their line as they lift. Read in a
+        just-reset env `env`."""
         pos, rot = self._palm(side)
         tips = self.env.sim.field("site_xpos")[env, self._tip_sites[side]].cpu().numpy()
-        reach = ((tips - pos[env]) @ rot[env][:, 0]).max()
+        local = (tips - pos[env]) @ rot[env]
         view = self.env.view
         point = view.point_pos(*self._points[side])[env, 2]
         base = view.body_pos(self.body)[env, 2] - self._rest
-        return float(reach + FLOOR_GAP - (point - base))
+        return (float(local[:, 0].max() + FLOOR_GAP - (point - base)),
+                float(local[1:, 1].mean()))
 
     def _hook(self, side: str, env: int) -> tuple[float, np.ndarray]:
         """The closure at which the fingertips (thumb aside) reach deepest below the palm,
@@ -175,7 +180,7 @@ class TwoHandLiftExpert:
                 self.full[side], grip = self._hooks[side]
                 self.offset[side] = grip + np.multiply(self.plan.shift, [1.0, mirror, 1.0])
             if self.plan.press:
-                self.offset[side][0] = self._hang(side, int(ids[0]))
+                self.offset[side][:2] = self._hang(side, int(ids[0]))
             pos, rot = self._palm(side)
             self.pos[side][ids], self.rot[side][ids] = pos[ids], rot[ids]
         self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0
