@@ -132,6 +132,15 @@ def test_lid_lifted_off_soft_finger_tips():
     assert solved >= 3, f"OpenLaptop on Wuji: expert solved {solved}/4"
 
 
+def test_lid_rests_near_soft_fingers_knuckles_on_an_arm():
+    """OpenLaptop, Wuji hands on FR3s: with the pads 12 mm past the lid's edge the soft
+    fingers bent under it and it stalled at ~25 degrees in all of these 4; 3 cm past,
+    4 of 4."""
+    keys = eval_keys(0, [0, 3, 4, 5])
+    solved = _solved("OpenLaptop", "bimanual_fr3_wuji", seed=0, enough=3, keys=keys)
+    assert solved >= 3, f"OpenLaptop on fr3_wuji: expert solved {solved}/4"
+
+
 def test_lid_reached_over_the_top():
     """OpenLaptop on the UR10e with LEAP hands: going straight from the arm's start to the
     low hover in front of the lid, the tilted fingers swept across the lid and pressed it

@@ -67,12 +67,14 @@ class OpenLaptop(ArticulatedTask):
     placements: ClassVar = {"laptop": Placement((-0.30, 0.0), (-0.20, 0.20), (-0.2, 0.2))}
     joint, threshold, reset_at = "laptop/hinge", 0.70, math.radians(-15.0)
     # Fingers tilted down slide under the raised front edge of the lid, from the front,
-    # and lift it up and over; the base's own weight holds it down. The pads go 12 mm past
-    # the edge: Wuji's soft fingers (~0.8 N at the tip) only bent under the lid (~4 N at
-    # its edge) when it rested on their very tips; deeper (15-20 mm), the Sharpa hand
-    # often pressed the lid shut on its way in.
+    # and lift it up and over; the base's own weight holds it down. The pads go 3 cm past
+    # the edge: Wuji's soft fingers (~0.8 N at the tip) bend under the lid (~4 N at its
+    # edge) resting nearer their tips, and stall it at ~25 degrees on every arm (0 of 8
+    # at 12 mm, 5-6 of 8 at 3 cm; every other hand 5-6 of 8 at 3 cm too). (Deeper once
+    # pressed the lid shut on the way in: the hand then came straight from its start,
+    # across the lid, not over the top.)
     expert = TurnPlan("laptop", "lid_edge", direction=-1.0, pitch=0.6,
-                      approach=(-1.0, 0.0, 0.3), under=0.012)
+                      approach=(-1.0, 0.0, 0.3), under=0.03)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"laptop": articulated.add_laptop(spec, "laptop")}
