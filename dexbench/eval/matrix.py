@@ -301,6 +301,9 @@ def _short(embodiment: str) -> str:
     return embodiment.removeprefix("bimanual_")
 
 
+CELL_IN = 0.42  # inches per heatmap cell
+
+
 def heatmap(info: dict, summary: dict, cells: list[Cell], path: pathlib.Path) -> None:
     """Panels of tasks (rows) x embodiments (columns): success coloured and written in
     each cell, infeasible cells hatched, a margin column of task means and a margin row
@@ -309,10 +312,12 @@ def heatmap(info: dict, summary: dict, cells: list[Cell], path: pathlib.Path) ->
     by_key = _cells_by_key(cells)
     cmap = plt.get_cmap("RdYlGn")
     ncols = max((len(p["embodiments"]) for p in panels), default=1)
-    heights = [len(p["tasks"]) + 3.2 for p in panels] or [1.0]
+    # Inches: a cell is as tall as it is wide (0.42 in), and each panel adds room for
+    # its title and its 90-degree embodiment labels, however few its rows.
+    heights = [CELL_IN * (len(p["tasks"]) + 1.3) + 1.5 for p in panels] or [1.0]
     fig, axes = plt.subplots(len(heights), 1, squeeze=False, dpi=150,
-                             figsize=(max(4.5, 2.6 + 0.42 * (ncols + 1.3)),
-                                      0.32 * sum(heights) + 1.2),
+                             figsize=(max(4.5, 2.6 + CELL_IN * (ncols + 1.3)),
+                                      sum(heights) + 0.6),
                              gridspec_kw={"height_ratios": heights})
     gap = 0.3
 
