@@ -154,7 +154,7 @@ def test_pressing_palms_centre_their_fingers_on_the_box():
     """BimanualLiftCarton with LEAP hands on FR3s: pressing at the hand's `grasp_offset`
     (a held cube's place, 5.5 cm to the side of LEAP's fingers) the two palms met the box
     off its middle and it swung about their line as it rose, in all of these 4; with the
-    fingers' middle on the grip point (`TwoHandLiftExpert._hang`), 4 of 4."""
+    fingers' middle on the grip point (`TwoHandLiftExpert._press_point`), 4 of 4."""
     keys = eval_keys(0, [1, 2, 13, 15])
     solved = _solved("BimanualLiftCarton", "bimanual_fr3_leap", seed=0, enough=3, keys=keys)
     assert solved >= 3, f"BimanualLiftCarton on fr3_leap: expert solved {solved}/4"

@@ -123,7 +123,7 @@ class TwoHandLiftExpert:
         ref = thumb_y.get("right", next(iter(thumb_y.values())))
         return {s: 1.0 if y * ref >= 0 else -1.0 for s, y in thumb_y.items()}
 
-    def _hang(self, side: str, env: int) -> tuple[float, float]:
+    def _press_point(self, side: str, env: int) -> tuple[float, float]:
         """Where a pressing hand's grip point lies in the hand frame: below the palm
         (along the fingers) for its longest open finger to end `FLOOR_GAP` above the
         object's base, and across the hand in line with its fingers' middle (thumb aside):
@@ -180,7 +180,7 @@ class TwoHandLiftExpert:
                 self.full[side], grip = self._hooks[side]
                 self.offset[side] = grip + np.multiply(self.plan.shift, [1.0, mirror, 1.0])
             if self.plan.press:
-                self.offset[side][:2] = self._hang(side, int(ids[0]))
+                self.offset[side][:2] = self._press_point(side, int(ids[0]))
             pos, rot = self._palm(side)
             self.pos[side][ids], self.rot[side][ids] = pos[ids], rot[ids]
         self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0

@@ -71,12 +71,11 @@ class TurnExpert:
         self.lift_from = np.zeros((n, 3))
         self.into = np.zeros(n)
         self.waiting = np.zeros(n, dtype=np.int64)  # steps the pads have been at their aim
-        # With `pitch`, the first hover (low, in front of an edge) is reached over the
-        # top (NaN: not set out yet): from an arm's start beside the object a straight
-        # line drags the tilted fingers across it (a laptop's lid pressed shut before
-        # they reach its edge). Hanging fingers come down from above their tip anyway.
-        self.travel_z = np.full(n, np.nan)
-        self.setting_out = np.zeros(n, dtype=bool)
+        # With `pitch`, the hover (low, in front of an edge) is reached over the top, at
+        # least this high: from an arm's start beside the object a straight line drags
+        # the tilted fingers across it (a laptop's lid pressed shut before they reach its
+        # edge). Hanging fingers come down from above their tip anyway.
+        self.travel_z = np.zeros(n)
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
@@ -84,7 +83,7 @@ class TurnExpert:
         self.pos[ids], self.rot[ids] = pos[ids], rot[ids]
         self.pads[ids] = tips[ids].mean(axis=1)
         self.stage[ids], self.waiting[ids] = 0, 0
-        self.travel_z[ids], self.setting_out[ids] = np.nan, self.plan.pitch is not None
+        self.travel_z[ids] = pos[ids, 2] + TRAVEL_RISE
         tip, pivot, axis, q = self._hinge_state()
         if self.plan.direction == 0.0:
             gap = [np.linalg.norm(_turn(pivot, axis, end - q, tip) - pos, axis=1)
@@ -172,12 +171,11 @@ class TurnExpert:
         speed, turn = speed * self.env.control_dt, TURN_RATE * self.env.control_dt
         if period is None:
             palm = aim - pads_world
-            out = self.setting_out
-            start = out & np.isnan(self.travel_z)
-            self.travel_z[start] = np.maximum(palm[:, 2], self.pos[:, 2] + TRAVEL_RISE)[start]
-            out &= self.stage == 0
-            waypoint, low = via_travel(self.pos, palm, self.travel_z)
-            palm[out], rot[out & low] = waypoint[out], self.rot[out & low]
+            if self.plan.pitch is not None:
+                out = self.stage == 0
+                waypoint, low = via_travel(self.pos, palm,
+                                           np.maximum(self.travel_z, palm[:, 2]))
+                palm[out], rot[out & low] = waypoint[out], self.rot[out & low]
             self.pos, self.rot = step_towards(self.pos, self.rot, palm, rot, speed, turn)
         else:
             # Stroke after stroke the hand swings round the part, its palm far out: the
