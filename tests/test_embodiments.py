@@ -23,6 +23,7 @@ from dexbench.embodiments.builder import (
     embodiment_names,
     parse_embodiment,
 )
+from dexbench.embodiments.hand_geometry import hand_geometry, hand_model_spec, palm_face
 from dexbench.embodiments.hands import HANDS, SYNERGIES
 from dexbench.embodiments.ik import solve_site_pose
 from dexbench.embodiments.layout import Embodiment
@@ -125,6 +126,54 @@ def test_left_hand_frame_mirrors_the_right(hand: str) -> None:
         tips[side] = local.mean(axis=0)
     gap = np.linalg.norm(tips["left"] - tips["right"] * [1.0, -1.0, 1.0])
     assert gap < 0.005, f"left finger tips {gap * 100:.1f} cm from the right's mirror image"
+
+
+@pytest.mark.parametrize("hand", list(HANDS))
+def test_palm_face_is_where_a_flat_surface_meets_the_open_hand(hand: str) -> None:
+    """`palm_face` scans rays; checked here by the collision distance (MuJoCo's own) of a
+    plane facing the open palm at the face's height from the palm and fingers (thumb
+    aside), and of one across the fingers at its reach from the whole hand: each touches
+    within 1.5 mm (the scan's 4 mm grid may miss a rounded tip's peak by a little)."""
+    spec, geo = hand_model_spec(HANDS[hand], "right"), hand_geometry(hand, "right")
+    face = palm_face(hand, "right")
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    rot, back = geo.frame_rot, np.diag([1.0, -1.0, -1.0])
+    # each plane's z (its normal) points back at the hand: H's -z, and H's -x
+    planes = {"face": (face.height * rot[:, 2], rot @ back),
+              "reach": (face.reach * rot[:, 0], rot[:, [1, 2, 0]] @ back)}
+    for name, (offset, frame) in planes.items():
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, frame.ravel())
+        spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[1, 1, 0.01],
+                                contype=0, conaffinity=0, quat=quat.tolist(),
+                                pos=(geo.frame_pos + offset).tolist())
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    data.ctrl[:] = geo.synergies["open"]
+    for _ in range(2000):
+        mujoco.mj_step(model, data)
+    sides = HANDS[hand].sides["right"]
+    palm = model.body(sides.palm_body).id
+    thumb, body = set(), model.body(sides.fingertip_bodies[0]).id
+    while body != palm:
+        thumb.add(body)
+        body = model.body_parentid[body]
+    fromto = np.zeros(6)
+    for name, skip in (("face", thumb), ("reach", set())):
+        plane = model.geom(name).id
+        gaps = [mujoco.mj_geomDistance(model, data, plane, g, 1.0, fromto)
+                for g in range(model.ngeom) if g != plane
+                and (model.geom_contype[g] or model.geom_conaffinity[g])
+                and model.geom_bodyid[g] not in skip and _below(model, g, palm)]
+        assert abs(min(gaps)) < 0.0015, f"{name} plane {min(gaps) * 1000:.1f} mm from the hand"
+
+
+def _below(model: mujoco.MjModel, geom: int, palm: int) -> bool:
+    """Whether geom `geom` is on body `palm` or a body below it (a finger)."""
+    body = model.geom_bodyid[geom]
+    while body not in (palm, 0):
+        body = model.body_parentid[body]
+    return body == palm
 
 
 # The thumb's actuators of each hand, by name: `hook` must find exactly these itself.

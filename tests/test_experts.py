@@ -150,14 +150,33 @@ def test_lid_reached_over_the_top():
     assert solved >= 3, f"OpenLaptop on ur10e_leap: expert solved {solved}/4"
 
 
-def test_pressing_palms_centre_their_fingers_on_the_box():
+def test_pressing_palms_centre_their_faces_on_the_box():
     """BimanualLiftCarton with LEAP hands on FR3s: pressing at the hand's `grasp_offset`
     (a held cube's place, 5.5 cm to the side of LEAP's fingers) the two palms met the box
     off its middle and it swung about their line as it rose, in all of these 4; with the
-    fingers' middle on the grip point (`TwoHandLiftExpert._press_point`), 4 of 4."""
+    middle of each pressing face on the grip point (`palm_face`), 4 of 4."""
     keys = eval_keys(0, [1, 2, 13, 15])
     solved = _solved("BimanualLiftCarton", "bimanual_fr3_leap", seed=0, enough=3, keys=keys)
     assert solved >= 3, f"BimanualLiftCarton on fr3_leap: expert solved {solved}/4"
+
+
+def test_pressing_palms_go_equally_deep_into_the_box():
+    """BimanualLiftCarton with floating Sharpa hands: placed by the palm's site, Sharpa's
+    face (further back than the plan's hand assumed) went 2.4 cm into the box, too little
+    to carry it (0 of 20); each face pushed 5 cm in (`palm_face`), 4 of 4."""
+    solved = _solved("BimanualLiftCarton", "bimanual_floating_sharpa", seed=0, enough=3,
+                     keys=eval_keys(0, [0, 1, 2, 3]))
+    assert solved >= 3, f"BimanualLiftCarton on floating_sharpa: expert solved {solved}/4"
+
+
+def test_holding_fingers_keep_off_the_moving_blade():
+    """SqueezeScissors with floating Allegro hands: the holding hand pressed ring 1 with
+    its fingers' mean, which put a tip of its wide-spread fingers on ring 0's blade and
+    held the scissors open (0 of 20); pressing with the tip that keeps the others off it
+    (`PressPlan.keep_off`), 4 of 4."""
+    solved = _solved("SqueezeScissors", "bimanual_floating_allegro", seed=0, enough=3,
+                     keys=eval_keys(0, [0, 1, 2, 3]))
+    assert solved >= 3, f"SqueezeScissors on floating_allegro: expert solved {solved}/4"
 
 
 def _solved(task: str, embodiment: str | None, seed: int, enough: int,

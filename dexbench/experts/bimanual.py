@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 import torch
 
-from dexbench.embodiments.hand_geometry import actuated_joints
+from dexbench.embodiments.hand_geometry import actuated_joints, palm_face
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids
@@ -54,7 +54,6 @@ PULL_SECONDS = 0.4
 LOST_DISTANCE = 0.04  # m a grip point may move in its hand before the grip counts as lost
 LOST_TILT = 8.0  # deg: the task fails at 10, so regrasp before
 OPEN_SECONDS = 0.4
-CUBE_HALF = 0.025  # m: `grasp_offset` is where a 5 cm cube's centre sits in the hand
 
 
 FLOOR_GAP = 0.015  # m: a pressing hand's longest fingertip above the object's base
@@ -88,10 +87,7 @@ class TwoHandLiftExpert:
         self._tip_sites = {s: [model.site(t).id for t in layouts[s].fingertip_sites]
                            for s in plan.grips}
         self._rest = info.rest_height
-        grasp = np.asarray(env.embodiment.hand.grasp_offset)
-        if plan.press:  # the palm, not a held cube's centre, on the grip point
-            grasp = grasp - [0.0, 0.0, CUBE_HALF]
-        self._offset = grasp + np.asarray(plan.shift)
+        self._offset = np.asarray(env.embodiment.hand.grasp_offset) + plan.shift
         self._dt = env.control_dt
         n = env.num_envs
         self.phase = np.zeros(n, dtype=np.int64)
@@ -123,22 +119,20 @@ class TwoHandLiftExpert:
         ref = thumb_y.get("right", next(iter(thumb_y.values())))
         return {s: 1.0 if y * ref >= 0 else -1.0 for s, y in thumb_y.items()}
 
-    def _press_point(self, side: str, env: int) -> tuple[float, float]:
+    def _press_offset(self, side: str, env: int) -> np.ndarray:
         """Where a pressing hand's grip point lies in the hand frame: below the palm
-        (along the fingers) for its longest open finger to end `FLOOR_GAP` above the
-        object's base, and across the hand in line with its fingers' middle (thumb aside):
-        the palm's own `grasp_offset` centres a held cube between fingers and thumb,
-        which for LEAP's is 5.5 cm to the side of the fingers, and two palms pressing off
-        the object's middle let it swing about their line as they lift. Read in a
-        just-reset env `env`."""
-        pos, rot = self._palm(side)
-        tips = self.env.sim.field("site_xpos")[env, self._tip_sites[side]].cpu().numpy()
-        local = (tips - pos[env]) @ rot[env]
+        (along the fingers) for the open hand's furthest reach to end `FLOOR_GAP` above
+        the object's base; across the hand at the middle of its pressing face
+        (`palm_face`), since two palms bearing off the object's middle let it swing about
+        their line as they lift; and the plan's `shift` out from that face, so every
+        hand's face ends equally deep in the object however far its palm stands out of
+        its palm site. Read in a just-reset env `env`."""
         view = self.env.view
         point = view.point_pos(*self._points[side])[env, 2]
         base = view.body_pos(self.body)[env, 2] - self._rest
-        return (float(local[:, 0].max() + FLOOR_GAP - (point - base)),
-                float(local[1:, 1].mean()))
+        face = palm_face(self.env.embodiment.hand.name, side)
+        return np.array([face.reach + FLOOR_GAP - (point - base), face.centre[1],
+                         face.height + self.plan.shift[2]])
 
     def _hook(self, side: str, env: int) -> tuple[float, np.ndarray]:
         """The closure at which the fingertips (thumb aside) reach deepest below the palm,
@@ -180,7 +174,7 @@ class TwoHandLiftExpert:
                 self.full[side], grip = self._hooks[side]
                 self.offset[side] = grip + np.multiply(self.plan.shift, [1.0, mirror, 1.0])
             if self.plan.press:
-                self.offset[side][:2] = self._press_point(side, int(ids[0]))
+                self.offset[side] = self._press_offset(side, int(ids[0]))
             pos, rot = self._palm(side)
             self.pos[side][ids], self.rot[side][ids] = pos[ids], rot[ids]
         self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0

@@ -47,7 +47,7 @@ HOVER = 0.08  # m back along the approach before going in beside the point
 LEAD = 0.03  # m the pads aim ahead of the point
 BESIDE = 0.025  # m the pads start from the point: behind it, or out along the approach
 ARRIVED = 0.01  # m
-HELD = 0.02  # m across from the holding point to the holding hand's mean finger tip
+HELD = 0.02  # m across from the holding point to the holding hand's pressing finger tips
 # m above its point the holding hand's mean finger tip may rest, over it, and hold: a hand
 # whose wrist meets the table first (Shadow's forearm, pressing the stapler's hinge block)
 # stops there, and would otherwise keep the pusher waiting; one coming down from its hover
@@ -122,8 +122,6 @@ class HoldActuateExpert:
                             if a.startswith(f"{self.other}/")]
         if self.holder is not None:
             self._hold_at = locate(env.task.objects, plan.hold.obj, plan.hold.point)
-            tips = env.embodiment.sides[self.other].fingertip_sites
-            self._hold_tips = [model.site(t).id for t in tips]
         n = env.num_envs
         eye = np.repeat(np.eye(3)[None], n, axis=0)
         self.pos, self.rot, self.level = np.zeros((n, 3)), eye.copy(), eye.copy()
@@ -166,12 +164,11 @@ class HoldActuateExpert:
                 self.clear[ids] = CLEAR_UP * UP - CLEAR_OUT * out
 
     def _held(self) -> np.ndarray:
-        """(N,) the holding hand's finger tips are over its point, at most `RESTS_ABOVE`
-        above it (always, without one)."""
+        """(N,) the holding hand's pressing finger tips are over its point, at most
+        `RESTS_ABOVE` above it (always, without one)."""
         if self.holder is None:
             return np.ones(self.env.num_envs, dtype=bool)
-        tips = self.env.sim.field("site_xpos").cpu().numpy()[:, self._hold_tips].mean(axis=1)
-        off = tips - self.env.view.point_pos(*self._hold_at).cpu().numpy()
+        off = self.holder.pressing_tips() - self.env.view.point_pos(*self._hold_at).cpu().numpy()
         return (np.linalg.norm(off[:, :2], axis=1) < HELD) & (off[:, 2] < RESTS_ABOVE)
 
     def _done(self) -> np.ndarray:

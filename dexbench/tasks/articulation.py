@@ -165,9 +165,12 @@ class SqueezeScissors(HoldActuateTask):
     placements: ClassVar = {"scissors": Placement((0.05, 0.05), (0.0, 0.0), (-0.3, 0.3))}
     held, threshold, reset_at = "scissors", 0.5, "upper"
     joints = ("scissors/blade0", "scissors/blade1")
-    # The left hand pins ring 1; the right hand's hanging fingers push ring 0 towards it.
+    # The left hand pins ring 1, no finger tip on ring 0's blade (Allegro's wide-spread
+    # fingers put one there and held the scissors open); the right hand's hanging fingers
+    # push ring 0 towards it.
     expert = HoldActuatePlan("scissors", "scissors/blade0", "ring0", direction=-1.0,
-                             done=0.7, hold=PressPlan("scissors", "ring1", pitch=0.5))
+                             done=0.7, hold=PressPlan("scissors", "ring1", pitch=0.5,
+                                                      keep_off="scissors/blade0"))
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"scissors": cutters.add_scissors(spec, "scissors")}

@@ -227,13 +227,17 @@ class LevelPlan:
 class PressPlan:
     """Press `point` of `obj` from above; `with_fingers` presses with the mean fingertip
     rather than the palm; `yaw` turns the fingers (rad) from the point's body x axis,
-    `pitch` tilts them down (rad) so only the tips touch."""
+    `pitch` tilts them down (rad) so only the tips touch. `keep_off` names a body (with
+    the bodies below it) no fingertip may rest on, a part beside the point that has to
+    move (the scissors' other ring): a hand whose spread fingers would put a tip on it
+    presses with one tip instead, or turns, whichever keeps the tips clearest of it."""
 
     obj: str
     point: PointRef
     with_fingers: bool = True
     yaw: float = 0.0
     pitch: float = 0.0
+    keep_off: str | None = None
 
 
 @dataclass(frozen=True)
@@ -312,8 +316,10 @@ class TwoHandPlan:
     hand holds a 5 cm cube (mirrored for a mirrored hand); `pull` (m) is how far the
     closed hands draw back along their fingers, `lift` (m) how high they then rise.
     With `press` (a closed box: no rim to hook) each open palm faces its grip point, a
-    side face's middle, fingers down to just above the object's base, and pushes `pull`
-    m on into it: the two pushes squeeze the object between the palms. With `hook` each
+    side face's middle, fingers down to just above the object's base, its pressing face
+    (`palm_face`: the palm's and fingers' outermost parts, thumb aside) centred on the
+    point and `shift`'s z (m) out from it, and pushes `pull` m on (so `pull` less that z
+    into the object): the two pushes squeeze the object between the palms. With `hook` each
     hand closes only as far as its fingertips reach deepest (a hook) and is placed, before
     `shift`, by where they then end: just past the grip point (a rim's middle), level with
     it, centred across the fingers. Placed by its cube grasp instead, a hand whose fingers
@@ -351,7 +357,7 @@ class HoldActuatePlan:
     yaw: float | None = None
     pitch: float = 0.0
     approach: Vec3 = (0.0, 0.0, 1.0)
-    hold: Any = None
+    hold: PressPlan | None = None
     side: str = "right"
     done: float = 1.0
     release: bool = False
