@@ -24,9 +24,9 @@ import torch
 
 from dexbench.embodiments.hand_geometry import actuated_joints, palm_face
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand, site_pose
+from dexbench.experts.adapter import REACH_MARGIN, ActionAdapter, HandCommand, site_pose
 from dexbench.experts.base import host_ids
-from dexbench.experts.motion import palm_down, step_towards
+from dexbench.experts.motion import palm_down, step_towards, turned
 from dexbench.tasks.plans import TwoHandPlan
 from dexbench.tasks.predicates import tilt_deg
 
@@ -57,6 +57,13 @@ OPEN_SECONDS = 0.4
 
 
 FLOOR_GAP = 0.015  # m: a pressing hand's longest fingertip above the object's base
+# rad a pressing hand may turn about its palm normal (fingers off vertical, the face on
+# its point): an arm whose wrist cannot hang the fingers straight down beside the box
+# (the UR10e's and xArm7's with the Shadow hand) takes the least turn it reaches as well
+# as any (`ActionAdapter.reach_cost` within `REACH_MARGIN` of the best). Up to 0.6 rad
+# the xArm7 with Wuji or Allegro hands turned for a nearer pose and lost a box it held
+# unturned (1.00 -> 0.10, 0.00); up to 0.4 they keep it (8 and 6 of 8).
+ROLLS = (0.0, -0.2, 0.2, -0.4, 0.4)
 HOOK_INSIDE = 0.02  # m: a hooking hand's closed fingertips past the grip point (a rim's
 # middle): half the rim's thickness, a fingertip's radius and some play
 
@@ -68,6 +75,11 @@ def facing(yaw: np.ndarray) -> np.ndarray:
     z = np.column_stack([np.cos(yaw), np.sin(yaw), np.zeros(len(yaw))])
     x = np.broadcast_to([0.0, 0.0, -1.0], z.shape)
     return np.stack([x, np.cross(z, x), z], axis=2)
+
+
+def _rolled(frames: np.ndarray, roll: float | np.ndarray) -> np.ndarray:
+    """(N, 3, 3) hand frames turned by `roll` (rad) about their own palm normals."""
+    return turned(frames[:, :, 2], roll) @ frames
 
 
 class TwoHandLiftExpert:
@@ -102,6 +114,8 @@ class TwoHandLiftExpert:
         self.held = {s: np.zeros((n, 3)) for s in plan.grips}
         self.offset = {s: self._offset.copy() for s in plan.grips}
         self.full = dict.fromkeys(plan.grips, 1.0)  # a closed hand's closure: see `_hook`
+        self.roll = {s: np.zeros(n) for s in plan.grips}  # rad about the palm normal
+        self._arm = env.embodiment.mount != "floating"
         self._hooks: dict[str, tuple[float, np.ndarray]] = {}  # per side, from the first reset
 
     def _palm(self, side: str) -> tuple[np.ndarray, np.ndarray]:
@@ -177,8 +191,31 @@ class TwoHandLiftExpert:
                 self.offset[side] = self._press_offset(side, int(ids[0]))
             pos, rot = self._palm(side)
             self.pos[side][ids], self.rot[side][ids] = pos[ids], rot[ids]
+            self.roll[side][ids] = 0.0
+        if self.plan.press and self._arm:
+            self._choose_rolls(ids)
         self.phase[ids], self.timer[ids], self.closure[ids] = Phase.APPROACH, 0.0, 0.0
         self.adapter.reset(ids)
+
+    def _choose_rolls(self, ids: np.ndarray) -> None:
+        """Per side and env, the least of `ROLLS` whose press (above the grip pose, on it,
+        pushed in) the arm reaches about as well as with any of them. The lift is left
+        out: an arm that reaches the press but not the lift's top (the UR10e with Allegro
+        hands) lifts the box past the task's height anyway, and turned for the top it
+        lost the box (1.00 -> 0.05)."""
+        poses = self._grip_poses()
+        for side, (point, rot) in poses.items():
+            for i in ids:
+                costs = []
+                for roll in ROLLS:
+                    frame = _rolled(rot[i][None], roll)[0]
+                    grip = point[i] - frame @ self.offset[side]
+                    path = [grip - APPROACH_HEIGHT * frame[:, 2], grip,
+                            grip + self.plan.pull * frame[:, 2]]
+                    costs.append(self.adapter.reach_cost(side, int(i),
+                                                         [(p, frame) for p in path]))
+                good = np.asarray(costs) <= min(costs) + REACH_MARGIN
+                self.roll[side][i] = ROLLS[int(np.argmax(good))]
 
     def _grip_poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Per side: the grip point (world) and the hand frame there: palm-down, fingers
@@ -191,7 +228,8 @@ class TwoHandLiftExpert:
             point = view.point_pos(body, local).cpu().numpy()
             inward = centre - point
             yaw = np.arctan2(inward[:, 1], inward[:, 0])
-            poses[side] = point, facing(yaw) if self.plan.press else palm_down(yaw)
+            poses[side] = point, (_rolled(facing(yaw), self.roll[side]) if self.plan.press
+                                  else palm_down(yaw))
         return poses
 
     def act(self) -> torch.Tensor:
