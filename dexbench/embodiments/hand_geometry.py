@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -257,7 +258,7 @@ class PalmFace:
 
 
 def _scan(model: mujoco.MjModel, data: mujoco.MjData, geo: HandGeometry, axis: int,
-          keep) -> np.ndarray:
+          keep: Callable[[int], bool]) -> np.ndarray:
     """(n, 3) points, in H, where rays along H's -`axis` (from `_RAY_FROM` out, on a
     `_FACE_GRID` grid over the other two axes' `_FACE_SPAN`) first hit a collision geom
     (groups 0-4) of a body `keep` accepts."""

@@ -14,7 +14,7 @@ import torch
 
 from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand, tips_in_palm_frame
+from dexbench.experts.adapter import ActionAdapter, HandCommand, subtree, tips_in_palm_frame
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 from dexbench.tasks.plans import PressPlan, locate
@@ -42,13 +42,12 @@ class PressExpert:
         self.pos = np.zeros((n, 3))
         self.rot = np.repeat(np.eye(3)[None], n, axis=0)
         self.contact = np.zeros((n, 3))  # pressing point in the hand frame
-        self.weights = np.zeros((n, len(self._tips)))  # of the fingertips it is the mean of
+        self.weights = np.zeros((n, len(self._tips)))  # fingertips whose mean presses
         self.turn = np.zeros(n)  # rad added to the plan's yaw (`keep_off`)
         self.pressing = np.zeros(n, dtype=bool)
         self._keep_off = []
         if plan.keep_off is not None:
-            root = model.body(plan.keep_off).id
-            below = {b for b in range(model.nbody) if _descends(model, b, root)}
+            below = subtree(model, model.body(plan.keep_off).id)
             self._keep_off = [g for g in range(model.ngeom) if model.geom_bodyid[g] in below
                               and (model.geom_contype[g] or model.geom_conaffinity[g])]
 
@@ -124,16 +123,9 @@ class PressExpert:
         return rotation_angle(self.rot, target_rot)
 
 
-def _descends(model: mujoco.MjModel, body: int, root: int) -> bool:
-    """Whether `body` is `root` or lies below it."""
-    while body != root and body != 0:
-        body = model.body_parentid[body]
-    return body == root
-
-
 def _box_distance(data: mujoco.MjData, geom: int, points: np.ndarray) -> np.ndarray:
-    """(k,) distances (m) of world `points` from geom `geom`'s bounding box (no less far
-    than from the geom itself), at `data`'s pose."""
+    """(k,) distances (m) of world `points` from geom `geom`'s bounding box at `data`'s
+    pose: at most their distances from the geom itself, so a clearance errs small."""
     model = data.model
     local = (points - data.geom_xpos[geom]) @ data.geom_xmat[geom].reshape(3, 3)
     centre, half = model.geom_aabb[geom, :3], model.geom_aabb[geom, 3:]
