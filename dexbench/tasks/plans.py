@@ -320,7 +320,8 @@ class TwoHandPlan:
     (`palm_face`: the palm's and fingers' outermost parts, thumb aside) centred on the
     point and `shift`'s z (m) out from it (on an arm, turned about the palm normal where
     the wrist cannot hang the fingers straight down), and pushes `pull` m on (so `pull`
-    less that z into the object): the two pushes squeeze the object between the palms. With `hook` each
+    less that z into the object): the two pushes squeeze the object between the palms.
+    With `hook` each
     hand closes only as far as its fingertips reach deepest (a hook) and is placed, before
     `shift`, by where they then end: just past the grip point (a rim's middle), level with
     it, centred across the fingers. Placed by its cube grasp instead, a hand whose fingers
