@@ -48,8 +48,8 @@ LEAD = 0.03  # m the pads aim ahead of the point
 BESIDE = 0.025  # m the pads start from the point: behind it, or out along the approach
 ARRIVED = 0.01  # m
 HELD = 0.02  # m across from the holding point to the holding hand's pressing finger tips
-# m above its point the holding hand's mean finger tip may rest, over it, and hold: a hand
-# whose wrist meets the table first (Shadow's forearm, pressing the stapler's hinge block)
+# m above its point the holding hand's pressing finger tips may rest, over it, and hold: a
+# hand whose wrist meets the table first (Shadow's forearm, pressing the stapler's hinge block)
 # stops there, and would otherwise keep the pusher waiting; one coming down from its hover
 # point (`press.HOVER`, 8 cm) is on it before the pusher is
 RESTS_ABOVE = 0.035
