@@ -148,8 +148,10 @@ def test_folder_flap_lifted_by_a_staggered_finger_row():
     tip's back met the edge from above and pressed the flap shut (0 of 20). Rolled level
     about the fingers, the row fits under it and lifts it."""
     env, expert = _with_expert("OpenFlatFolder", "bimanual_floating_leap", 1, 0, nthread=1)
-    _, _, tips = tips_in_palm_frame(env, expert._palm, expert._tips)
-    level = np.einsum("nij,nkj->nki", expert.roll, tips)
+    assert (expert.chosen == 0).all(), "floating hands reach alike: the right one pushes"
+    pusher = expert.experts[0]
+    _, _, tips = tips_in_palm_frame(env, pusher._palm, pusher._tips)
+    level = np.einsum("nij,nkj->nki", pusher.roll, tips)
     assert np.ptp(tips[0, :, 2]) > 0.01
     assert np.ptp(level[0, :, 2]) < 1e-3, "the row lies in the palm plane"
     assert np.allclose(level_row(np.array([[[0.1, -0.02, 0.0], [0.1, 0.02, 0.0]]])), np.eye(3))

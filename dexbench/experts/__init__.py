@@ -13,6 +13,7 @@ from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.base import Expert
 from dexbench.experts.bimanual import TwoHandLiftExpert
 from dexbench.experts.both_hands import BothHandsExpert
+from dexbench.experts.either_hand import EitherHandExpert
 from dexbench.experts.grasp import GraspExpert, LevelGraspExpert
 from dexbench.experts.hold_actuate import HoldActuateExpert
 from dexbench.experts.insert import InsertExpert
@@ -59,7 +60,11 @@ def build_expert(env: DexEnv, plan: Any) -> Expert:
     if isinstance(plan, plans.BothHandsPlan):
         return BothHandsExpert(env, plan, lambda hand, side: KINDS[type(hand)](env, hand, side))
     if isinstance(plan, plans.HoldActuatePlan):
-        return HoldActuateExpert(env, plan, lambda hold, side: KINDS[type(hold)](env, hold, side))
+        def hold(kind: Any, side: str) -> Expert:
+            return KINDS[type(kind)](env, kind, side)
+        if plan.side == plans.EITHER:
+            return EitherHandExpert(env, plan, hold)
+        return HoldActuateExpert(env, plan, hold)
     try:
         return KINDS[type(plan)](env, plan)
     except KeyError:

@@ -63,6 +63,7 @@ LEVEL = 1e-3  # trace(R1^T R2) this close to 3: the hand has turned level
 # rising, to carry the corner up rather than slide past it: beyond the friction cone
 # (friction 1, MuJoCo's default, the tips' and the parts') about the vertical
 SLIDES_BELOW = np.pi / 4
+PUSH_POSES = 4  # palm poses along the push that `push_poses` gives, its start and end included
 
 
 def level_row(tips: np.ndarray) -> np.ndarray:
@@ -195,20 +196,52 @@ class HoldActuateExpert:
         radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
         return self.plan.direction * np.cross(axis, radial), radial
 
+    def _hand(self, point: np.ndarray, push: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(N, 3, 3) heading (palm down, fingers along the hand's yaw) and pushing hand
+        frames; (N, 3) or (3,) the direction it comes in from, and (N, 3) where its pads
+        start beside `point` (N, 3) moving along `push` (N, 3)."""
+        view = self.env.view
+        if self.plan.yaw is None:  # fingers hanging, pads facing the push
+            heading = palm_down(np.arctan2(-push[:, 1], -push[:, 0]))
+            return (heading, heading @ pitch_down(np.pi / 2), np.array([0.0, 0.0, 1.0]),
+                    point - BESIDE * push)
+        heading = palm_down(body_yaw(view.body_quat(self.root).cpu().numpy()) + self.plan.yaw)
+        approach = view.axis(self.root, self.plan.approach).cpu().numpy()
+        return (heading, heading @ pitch_down(self.plan.pitch) @ self.roll, approach,
+                point + BESIDE * approach / np.linalg.norm(approach, axis=1, keepdims=True))
+
+    def push_poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The palm poses ((N, 3), (N, 3, 3)) of the push: its pads on the point now, then
+        carrying it through the rest of the joint's `done` travel (`PUSH_POSES` in all),
+        as if the part moved alone: what a mount must take for the push
+        (`ActionAdapter.reach_cost`)."""
+        view, task = self.env.view, self.env.task
+        now = view.point_pos(self.body, self.local).cpu().numpy()
+        lo, hi = task.joint_range(self.plan.joint)
+        start = task.initial_joints[self.plan.joint]
+        left = np.maximum(self.plan.done - task.joint_progress(view, self.plan.joint)
+                          .cpu().numpy(), 0.0) * max(start - lo, hi - start)
+        axis = view.axis(self._joint_body, self._joint_axis).cpu().numpy()
+        hinge = view.point_pos(self._joint_body, self._joint_pos).cpu().numpy()
+        poses = []
+        for share in np.linspace(0.0, 1.0, PUSH_POSES):
+            travel = self.plan.direction * share * left
+            if self._slide:
+                point = now + travel[:, None] * axis
+            else:
+                point = hinge + np.einsum("nij,nj->ni", turned(axis, travel), now - hinge)
+            push, radial = self._motion(point)
+            _, rot, _, _ = self._hand(point, push)
+            pads = np.einsum("nij,nj->ni", rot, self.pads)
+            poses.append((point - self.into[:, None] * radial - pads, rot))
+        return poses
+
     def act(self) -> torch.Tensor:
         view = self.env.view
         point = view.point_pos(self.body, self.local).cpu().numpy()
         push, radial = self._motion(point)
-        if self.plan.yaw is None:  # fingers hanging, pads facing the push
-            heading = palm_down(np.arctan2(-push[:, 1], -push[:, 0]))
-            rot = heading @ pitch_down(np.pi / 2)
-            approach = np.array([0.0, 0.0, 1.0])
-            beside = point - BESIDE * push
-        else:
-            heading = palm_down(body_yaw(view.body_quat(self.root).cpu().numpy()) + self.plan.yaw)
-            rot = heading @ pitch_down(self.plan.pitch) @ self.roll
-            approach = view.axis(self.root, self.plan.approach).cpu().numpy()
-            beside = point + BESIDE * approach / np.linalg.norm(approach, axis=1, keepdims=True)
+        heading, rot, approach, beside = self._hand(point, push)
         into = self.into[:, None] * radial
         goals = (beside + HOVER * approach, beside, point - into, point + LEAD * push - into)
         pads = np.einsum("nij,nj->ni", rot, self.pads)

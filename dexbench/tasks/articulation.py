@@ -13,6 +13,7 @@ from dexbench.assets.objects import ObjectInfo
 from dexbench.envs.dex_env import DexEnv
 from dexbench.tasks.catalog import register
 from dexbench.tasks.plans import (
+    EITHER,
     GraspPlan,
     HoldActuatePlan,
     PinchPlan,
@@ -100,7 +101,7 @@ class OpenFlatFolder(HoldActuateTask):
     held, joints, threshold, reset_at = "folder", ("folder/flap",), 0.6, math.radians(10.0)
     # The base's weight holds it down: one hand lifts the flap up and over.
     expert = HoldActuatePlan("folder", "folder/flap", ("flap_edge", BELOW), done=0.75,
-                             **UNDER_EDGE)
+                             side=EITHER, **UNDER_EDGE)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"folder": office.add_flat_folder(spec, "folder")}

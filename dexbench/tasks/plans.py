@@ -21,6 +21,9 @@ from dexbench.envs.dex_env import DexEnv
 
 PointRef = str | Vec3 | tuple[str, Vec3]
 EnvFn = Callable[[DexEnv], np.ndarray]
+# A `HoldActuatePlan` side: each episode, the hand whose arm reaches the push better
+# (`dexbench.experts.either_hand`); the right one on a floating pair, where both do.
+EITHER = "either"
 
 
 def locate(objects: Mapping[str, ObjectInfo], obj: str, ref: PointRef) -> tuple[str, Vec3]:
@@ -350,7 +353,8 @@ class HoldActuatePlan:
     where it came in from (a holding hand keeps holding); then it is finished (for a
     `SequencePlan`). Without `hold`, the other hand waits out of the way, then, with
     `then`, runs that plan once the joint is done (picks the object up with its part
-    moved) and the pusher is finished when it is."""
+    moved) and the pusher is finished when it is. `side` `EITHER` picks the pushing hand
+    per episode, for an object that may lie on either hand's side of the table."""
 
     obj: str
     joint: str
