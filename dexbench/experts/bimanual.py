@@ -181,14 +181,15 @@ class TwoHandLiftExpert:
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
         for side, mirror in self._mirror(int(ids[0])).items():
-            self.offset[side] = self._offset * [1.0, mirror, 1.0]
-            if self.plan.hook:  # the hand's own geometry: the same at every reset
+            if self.plan.press:
+                self.offset[side] = self._press_offset(side, int(ids[0]))
+            elif self.plan.hook:  # the hand's own geometry: the same at every reset
                 if side not in self._hooks:
                     self._hooks[side] = self._hook(side, int(ids[0]))
                 self.full[side], grip = self._hooks[side]
                 self.offset[side] = grip + np.multiply(self.plan.shift, [1.0, mirror, 1.0])
-            if self.plan.press:
-                self.offset[side] = self._press_offset(side, int(ids[0]))
+            else:
+                self.offset[side] = self._offset * [1.0, mirror, 1.0]
             pos, rot = self._palm(side)
             self.pos[side][ids], self.rot[side][ids] = pos[ids], rot[ids]
             self.roll[side][ids] = 0.0

@@ -65,12 +65,9 @@ class EitherHandExpert:
     def act(self) -> torch.Tensor:
         actions = None
         for k, expert in enumerate(self.experts):
-            rows = self.chosen == k
-            if not rows.any():
+            if not (self.chosen == k).any():
                 continue  # its state goes stale where unused; a reset renews it
             out = expert.act()
-            if actions is None:
-                actions = out.clone()
-            actions[torch.as_tensor(rows, device=out.device)] = out[
-                torch.as_tensor(rows, device=out.device)]
+            rows = torch.as_tensor(self.chosen == k, device=out.device)
+            actions = out if actions is None else torch.where(rows[:, None], out, actions)
         return actions
