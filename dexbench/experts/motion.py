@@ -6,6 +6,7 @@ import mujoco
 import numpy as np
 
 from dexbench.embodiments.builder import HOME_PALM_ROT
+from dexbench.embodiments.ik import rotation_angle
 
 # Shared with the plans (`dexbench.tasks.plans`), which need them too.
 from dexbench.tasks.plans import body_yaw as body_yaw
@@ -87,3 +88,20 @@ def step_towards(pos: np.ndarray, rot: np.ndarray, target_pos: np.ndarray,
         mujoco.mju_quat2Mat(step, quat)
         new_rot[i] = step.reshape(3, 3) @ rot[i]
     return new_pos, new_rot
+
+
+def way_poses(pos: np.ndarray, rot: np.ndarray, to_pos: np.ndarray, to_rot: np.ndarray,
+              count: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """`count` palm poses (3,), (3, 3) evenly apart from one pose to another, the last
+    that one: an arm's warm-started IK follows a commanded motion step by step, so a
+    reach score (`ActionAdapter.reach_cost`) that solves a far pose from the arm's joints
+    in one go may find a solution the arm never gets to."""
+    here, turn = pos[None], rot[None]
+    step = np.linalg.norm(to_pos - pos) / count
+    angle = float(rotation_angle(to_rot, rot))
+    out = []
+    for _ in range(count):
+        here, turn = step_towards(here, turn, to_pos[None], to_rot[None], step + 1e-6,
+                                  angle / count + 1e-6)
+        out.append((here[0], turn[0]))
+    return out

@@ -30,7 +30,6 @@ import numpy as np
 import torch
 
 from dexbench.embodiments.hand_geometry import hand_geometry
-from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import REACH_MARGIN
 from dexbench.experts.base import host_ids
@@ -41,7 +40,7 @@ from dexbench.experts.grasp import (
     Phase,
     stand_off,
 )
-from dexbench.experts.motion import step_towards, turned, yawed
+from dexbench.experts.motion import turned, way_poses, yawed
 from dexbench.tasks.plans import PourPlan, locate
 from dexbench.tasks.predicates import tilt_deg
 
@@ -165,14 +164,7 @@ class PourExpert:
         grasp = self.grasp
         above = pos - APPROACH_HEIGHT * rot[:, 2]
         above[2] += APPROACH_LIFT * self.plan.grasp.side
-        here, turn = grasp.pos[i:i + 1], grasp.rot[i:i + 1]
-        step, angle = np.linalg.norm(above - here) / WAYPOINTS, float(rotation_angle(rot, turn[0]))
-        out = []
-        for _ in range(WAYPOINTS):
-            here, turn = step_towards(here, turn, above[None], rot[None], step + 1e-6,
-                                      angle / WAYPOINTS + 1e-6)
-            out.append((here[0], turn[0]))
-        return out
+        return way_poses(grasp.pos[i], grasp.rot[i], above, rot, WAYPOINTS)
 
 
 def _overridden(pose: np.ndarray, actuators: Sequence[str],
