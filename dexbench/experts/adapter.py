@@ -8,6 +8,7 @@ the fingers blend between the hand's `open` pose and a synergy (`power`, `pinch`
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -47,6 +48,19 @@ def subtree(model: mujoco.MjModel, root: int) -> set[int]:
         if model.body_parentid[body] in out:
             out.add(body)
     return out
+
+
+def collidable(model: mujoco.MjModel, body: int) -> list[int]:
+    """A body's geoms that take part in collisions."""
+    first = model.body_geomadr[body]
+    return [g for g in range(first, first + model.body_geomnum[body])
+            if model.geom_contype[g] or model.geom_conaffinity[g]]
+
+
+def nearly_best(costs: Sequence[float]) -> int:
+    """Index of the first of `costs` (options' `ActionAdapter.reach_cost`, in the order
+    they are preferred) within `REACH_MARGIN` of the least."""
+    return next(k for k, c in enumerate(costs) if c <= min(costs) + REACH_MARGIN)
 
 
 @dataclass
@@ -174,7 +188,7 @@ class ActionAdapter:
         model, data = self.model, self._scratch
         root = model.body(self.env.embodiment.sides[side].hand_root).id
         part = [g for b in subtree(model, root) if model.body_weldid[b] == model.body_weldid[root]
-                for g in self._collidable(b)]
+                for g in collidable(self.model, b)]
         data.qpos[:] = model.qpos0
         set_joints(model, data, self.env.embodiment.sides[side].home_qpos)
         mujoco.mj_kinematics(model, data)
@@ -190,7 +204,7 @@ class ActionAdapter:
         top = model.body(self.env.embodiment.sides[side].hand_root).id
         body, links = model.body_parentid[top], []
         while model.body_weldid[body]:
-            links += self._collidable(body)
+            links += collidable(self.model, body)
             top, body = body, model.body_parentid[body]
         return links, top
 
@@ -202,19 +216,13 @@ class ActionAdapter:
         model = self.model
         links, top = self._arm_links(side)
         hand_bodies = subtree(model, model.body(self.env.embodiment.sides[side].hand_root).id)
-        hand = [g for b in sorted(hand_bodies) for g in self._collidable(b)]
+        hand = [g for b in sorted(hand_bodies) for g in collidable(self.model, b)]
         moving, mount = set(links + hand), subtree(model, top)
-        rest = [g for b in range(model.nbody) if b not in mount for g in self._collidable(b)
+        rest = [g for b in range(model.nbody) if b not in mount for g in collidable(self.model, b)
                 if g not in moving]
         pairs = [(a, b) for i, a in enumerate(links) for b in links[i + 1:] + hand]
         pairs += [(a, b) for a in links + hand for b in rest]
         return tuple((a, b) for a, b in pairs if self._collide(a, b))
-
-    def _collidable(self, body: int) -> list[int]:
-        """A body's geoms that take part in collisions."""
-        model, first = self.model, self.model.body_geomadr[body]
-        return [g for g in range(first, first + model.body_geomnum[body])
-                if model.geom_contype[g] or model.geom_conaffinity[g]]
 
     def _collide(self, geom: int, other: int) -> bool:
         """Whether the simulator makes contacts between two geoms: their bit masks

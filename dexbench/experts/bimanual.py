@@ -24,7 +24,7 @@ import torch
 
 from dexbench.embodiments.hand_geometry import actuated_joints, palm_face
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import REACH_MARGIN, ActionAdapter, HandCommand, site_pose
+from dexbench.experts.adapter import ActionAdapter, HandCommand, nearly_best, site_pose
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import palm_down, step_towards, turned, way_poses
 from dexbench.tasks.plans import TwoHandPlan
@@ -221,8 +221,7 @@ class TwoHandLiftExpert:
                                        WAYPOINTS), (grip, frame),
                             (grip + self.plan.pull * frame[:, 2], frame)]
                     costs.append(self.adapter.reach_cost(side, int(i), path))
-                good = np.asarray(costs) <= min(costs) + REACH_MARGIN
-                self.roll[side][i] = ROLLS[int(np.argmax(good))]
+                self.roll[side][i] = ROLLS[nearly_best(costs)]
 
     def _grip_poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Per side: the grip point (world) and the hand frame there: palm-down, fingers

@@ -22,7 +22,7 @@ import numpy as np
 import torch
 
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import REACH_MARGIN
+from dexbench.experts.adapter import nearly_best
 from dexbench.experts.base import Expert, host_ids
 from dexbench.experts.hold_actuate import HoldActuateExpert
 from dexbench.tasks.plans import HoldActuatePlan
@@ -54,8 +54,7 @@ class EitherHandExpert:
         for i in ids:
             costs = [e.adapter.reach_cost(e.plan.side, i, [(p[i], r[i]) for p, r in path])
                      for e, path in zip(self.experts, paths, strict=True)]
-            self.chosen[i] = next(k for k, c in enumerate(costs)
-                                  if c <= min(costs) + REACH_MARGIN)
+            self.chosen[i] = nearly_best(costs)
 
     @property
     def finished(self) -> np.ndarray:

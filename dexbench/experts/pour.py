@@ -31,7 +31,7 @@ import torch
 
 from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import REACH_MARGIN
+from dexbench.experts.adapter import nearly_best
 from dexbench.experts.base import host_ids
 from dexbench.experts.grasp import (
     APPROACH_HEIGHT,
@@ -153,9 +153,7 @@ class PourExpert:
                 costs.append(grasp.adapter.reach_cost(grasp.side, i, poses))
                 if costs[0] < GROSS:
                     break
-            near = min(costs) + REACH_MARGIN
-            self._held_rot[i] = next(r for r, c in zip(held_rots, costs, strict=True)
-                                     if c <= near)
+            self._held_rot[i] = held_rots[nearly_best(costs)]
 
     def _way_in(self, i: int, pos: np.ndarray, rot: np.ndarray
                 ) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -14,7 +14,13 @@ import torch
 
 from dexbench.embodiments.ik import rotation_angle
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import ActionAdapter, HandCommand, subtree, tips_in_palm_frame
+from dexbench.experts.adapter import (
+    ActionAdapter,
+    HandCommand,
+    collidable,
+    subtree,
+    tips_in_palm_frame,
+)
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards
 from dexbench.tasks.plans import PressPlan, locate
@@ -48,8 +54,7 @@ class PressExpert:
         self._keep_off = []
         if plan.keep_off is not None:
             below = subtree(model, model.body(plan.keep_off).id)
-            self._keep_off = [g for g in range(model.ngeom) if model.geom_bodyid[g] in below
-                              and (model.geom_contype[g] or model.geom_conaffinity[g])]
+            self._keep_off = [g for b in sorted(below) for g in collidable(model, b)]
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
