@@ -51,3 +51,22 @@ def test_arm_keeps_the_ball_on_its_line_between_the_posts():
         if env.task.success(env.view)[0]:
             break
     assert env.task.success(env.view)[0]
+
+
+def test_ball_that_veers_off_is_steered_back_before_the_posts():
+    """Floating Inspire, episodes 10, 16, 17, 18: the ball veers off its line as it meets
+    the slope; steered at a point 10 cm along the line it came back too late and ran onto
+    a post (0 of 4), steered at 5 cm it goes between them and over the crest."""
+    episodes = [10, 16, 17, 18]
+    env = make_env("PushSmallSphereObstacleSlope", "floating_inspire", num_envs=len(episodes),
+                   seed=0, nthread=1)
+    env.reset_to(torch.arange(len(episodes)), eval_keys(0, episodes))
+    expert = make_expert(env)
+    expert.reset(torch.arange(len(episodes)))
+    solved = torch.zeros(len(episodes), dtype=torch.bool)
+    for _ in range(1200):
+        env.step(expert.act())
+        solved |= env.task.success(env.view).cpu()
+        if solved.all():
+            break
+    assert solved.all(), f"solved {solved.tolist()}"

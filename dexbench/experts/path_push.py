@@ -53,7 +53,11 @@ PUSH_SPEED = 0.06  # m/s of the fingertip while pushing
 TURN_RATE = 3.0  # rad/s
 TIP_RADIUS = 0.01  # m
 PRESS = 0.015  # m the command leads the fingertip into the ball
-LOOKAHEAD = 0.1  # m along the path: where the ball is steered towards
+# m along the path: where the ball is steered towards. Near, so a ball that veered off
+# (a finger's abduction gives under the push) turns back onto the line before the posts:
+# at 0.1 the Inspire hand's balls ran onto a post (all four mounts 9 of 40 -> 28 of 40
+# over episodes 10-19 at 0.05; Shadow, Sharpa, Allegro unchanged but UR10e Allegro 10 -> 8).
+LOOKAHEAD = 0.05
 PREDICT = 0.4  # s: the ball is steered from where it will be this much later
 HIGH = 0.08  # m above the ball's top: the finger's lowest point travelling over it
 CLEAR = 0.004  # m: the finger's lowest point above the ball's bottom while pushing
