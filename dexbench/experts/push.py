@@ -28,6 +28,7 @@ from dexbench.experts.adapter import (
 )
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
+from dexbench.experts.surface import surface_in_palm_frame
 from dexbench.tasks.plans import PushPlan
 
 SPEED = 0.4  # m/s in the air
@@ -36,7 +37,11 @@ MIN_PUSH_SPEED = 0.04  # m/s at the end of a push
 SLOW_DOWN = 0.15  # s: push speed is the push still to go over this
 TURN_RATE = 3.0  # rad/s
 TIP_RADIUS = 0.01  # m: a fingertip's half-width, the pusher's size
-LOW = 0.018  # m above the table: the leading fingertip while pushing
+LOW = 0.018  # m above the table: the lowest fingertip (site) while pushing ...
+# ... unless that presses the finger ends (their geoms' extreme points) further into the
+# table than a resting contact sinks (~1 mm): a long distal link (Inspire's, LEAP's: 2.5-2.7
+# cm past its site, against the Shadow hand's 1.9) would drag on the table and stall
+ENDS_CLEAR = -0.001  # m above the table: the finger ends while pushing, at least
 CLEAR = 0.05  # m above the block's top: the fingertips while travelling over it
 STANDOFF = 0.02  # m between the fingertip and the outline before a push
 EDGE_STEP = 0.01  # m between candidate contact points along the outline
@@ -122,6 +127,8 @@ class PushExpert:
         self.rot = np.repeat(np.eye(3)[None], n, axis=0)
         self.yaw = np.zeros(n)
         self.offsets = np.zeros((n, len(self._tips), 3))  # fingertips in the hand frame
+        # where the fingertip links end (their geoms' extreme points), in the hand frame
+        self.surface = surface_in_palm_frame(env, self._palm, self._tips)
         self.lead = np.zeros(n, dtype=np.int64)
         self.stage = np.full(n, Stage.PLAN)
         self.start = np.zeros((n, 3))  # fingertip before the push (world)
@@ -133,13 +140,14 @@ class PushExpert:
         self.ban_timer = np.zeros(n)
         self.tilt = np.zeros(n)
         self.lean = np.zeros(n)  # rad the fingers lean out of straight down (arms only)
-        self.drop = np.zeros(n)  # m the leading fingertip is above the lowest one
+        self.drop = np.zeros(n)  # m the leading fingertip is above the lowest one (or more)
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         palm = pos[ids]
         self.offsets[ids] = tips[ids]
+        self.surface[ids] = surface_in_palm_frame(self.env, self._palm, self._tips)[ids]
         self.rot[ids] = rot[ids]
         self.lead[ids] = 0
         self.tip[ids] = palm + np.einsum("nij,nj->ni", rot[ids], self.offsets[ids, 0])
@@ -275,11 +283,14 @@ class PushExpert:
         shape = (len(ids), 2, len(tilts), len(self._leans))
         leads, drops = np.zeros(shape, dtype=np.int64), np.zeros(shape)
         for j, k, m in np.ndindex(shape[1:]):
-            tips = np.einsum("nij,nkj->nki", self._hanging(
-                options[:, j], np.full(len(ids), tilts[k]), np.full(len(ids), self._leans[m])),
-                self.offsets[ids])
+            hang = self._hanging(options[:, j], np.full(len(ids), tilts[k]),
+                                 np.full(len(ids), self._leans[m]))
+            tips = np.einsum("nij,nkj->nki", hang, self.offsets[ids])
+            ends = np.einsum("nij,nkj->nki", hang, self.surface[ids])
             leads[:, j, k, m] = (tips @ push[:, :, None])[..., 0].argmax(axis=1)
-            drops[:, j, k, m] = tips[rows, leads[:, j, k, m], 2] - tips[..., 2].min(axis=1)
+            lead_z = tips[rows, leads[:, j, k, m], 2]
+            drops[:, j, k, m] = np.maximum(lead_z - tips[..., 2].min(axis=1), lead_z
+                                           - ends[..., 2].min(axis=1) + ENDS_CLEAR - LOW)
         # the yaw's distance first, then the lean, then the drop (floating: no leans)
         rank = (far[:, :, None, None] * 1e3 + np.abs(self._leans) * 10.0 + drops)
         if self._arm:

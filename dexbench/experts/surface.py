@@ -1,0 +1,78 @@
+"""Points on a body's collision geoms among which its farthest point in any direction
+lies: where a finger actually ends, rather than its fingertip site (the distal link's
+centre of mass, 1.5-3 cm short of its end, by hand)."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from dexbench.envs.dex_env import DexEnv
+from dexbench.experts.adapter import collidable, site_pose
+
+_G = mujoco.mjtGeom
+
+
+def _sphere_directions(count: int = 128) -> np.ndarray:
+    """(count, 3) unit vectors spread evenly over the sphere (a Fibonacci lattice): the
+    farthest of them along any direction is within ~12 degrees of it (< 2.5% of a
+    radius short)."""
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    ring = np.sqrt(1.0 - z**2)
+    angle = np.pi * (1.0 + 5**0.5) * k
+    return np.column_stack([ring * np.cos(angle), ring * np.sin(angle), z])
+
+
+def geom_extremes(model: mujoco.MjModel, geom: int) -> np.ndarray:
+    """(K, 3) points in the geom's frame whose convex hull is the geom (meshes: their
+    vertices, boxes: corners; round shapes: a dense sample of their surface)."""
+    kind, size = model.geom_type[geom], model.geom_size[geom]
+    unit = _sphere_directions()
+    if kind == _G.mjGEOM_MESH:
+        mesh = model.geom_dataid[geom]
+        start = model.mesh_vertadr[mesh]
+        return model.mesh_vert[start:start + model.mesh_vertnum[mesh]].astype(float)
+    if kind == _G.mjGEOM_BOX:
+        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        return signs * size
+    if kind == _G.mjGEOM_SPHERE:
+        return size[0] * unit
+    if kind == _G.mjGEOM_CAPSULE:
+        return size[0] * unit + np.sign(unit[:, 2:]) * [0.0, 0.0, size[1]]
+    if kind == _G.mjGEOM_ELLIPSOID:
+        return unit * size
+    if kind == _G.mjGEOM_CYLINDER:
+        ring = unit[:, :2] / np.linalg.norm(unit[:, :2], axis=1, keepdims=True)
+        rim = np.column_stack([size[0] * ring, np.zeros(len(ring))])
+        return np.concatenate([rim + [0, 0, size[1]], rim - [0, 0, size[1]]])
+    raise ValueError(f"geom {model.geom(geom).name}: type {kind} has no extreme points here")
+
+
+def body_surface(model: mujoco.MjModel, body: int) -> np.ndarray:
+    """(K, 3) extreme points of a body's collision geoms, in the body's frame."""
+    points = []
+    for g in collidable(model, body):
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, model.geom_quat[g])
+        points.append(model.geom_pos[g] + geom_extremes(model, g) @ rot.reshape(3, 3).T)
+    return np.concatenate(points)
+
+
+def surface_in_palm_frame(env: DexEnv, palm: int, sites: list[int]) -> np.ndarray:
+    """(N, K, 3) the extreme points of the bodies carrying `sites` (fingertips), in the
+    palm site's frame of every env: where the fingers end, whatever the palm's pose."""
+    model = env.scene.model
+    bodies = [int(model.site_bodyid[s]) for s in sites]
+    local = [body_surface(model, b) for b in bodies]
+    pos, rot = site_pose(env, palm)
+    xpos = env.sim.field("xpos").cpu().numpy()[:, bodies]
+    xquat = env.sim.field("xquat").cpu().numpy()[:, bodies]
+    out = []
+    for k, points in enumerate(local):
+        mats = np.zeros((len(pos), 9))
+        for i in range(len(pos)):
+            mujoco.mju_quat2Mat(mats[i], xquat[i, k])
+        world = xpos[:, k, None] + np.einsum("nij,kj->nki", mats.reshape(-1, 3, 3), points)
+        out.append(np.einsum("nji,nkj->nki", rot, world - pos[:, None]))
+    return np.concatenate(out, axis=1)
