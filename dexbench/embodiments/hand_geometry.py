@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 
 from dexbench.assets.robots import robot_spec
-from dexbench.embodiments.hands import HANDS, SIDES, SYNERGIES, HandSpec
+from dexbench.embodiments.hands import HANDS, SIDES, SOFT_CONTACT, SYNERGIES, HandSpec
 
 _MAX_SETTLE_STEPS = 2000  # 4 s at the 2 ms timestep used here
 # m: a left model whose knuckles lie further than this from the mirror image of the right
@@ -56,10 +56,15 @@ class HandGeometry:
 
 
 def hand_model_spec(hand: HandSpec, side: str) -> mujoco.MjSpec:
-    """The hand's spec with its keyframes removed (they would not fit a composed scene)."""
+    """The hand's spec with its keyframes removed (they would not fit a composed scene)
+    and, for a hand with `soft_contacts`, the Shadow hand's contact softness."""
     spec = robot_spec(hand.collection, hand.sides[side].entry)
     for key in list(spec.keys):
         spec.delete(key)
+    if hand.soft_contacts:
+        solref, solimp = SOFT_CONTACT
+        for geom in spec.geoms:
+            geom.solref, geom.solimp = solref, solimp
     return spec
 
 

@@ -10,6 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 SIDES = ("right", "left")
+# The Shadow hand model's contact softness, MuJoCo's default impedance: (solref: time
+# constant s, damping ratio), (solimp)
+SOFT_CONTACT = ((0.005, 1.0), (0.9, 0.95, 0.001, 0.5, 2.0))
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,11 @@ class HandSpec:
     """Added (rad) to a pour's `grasp_turn` (about the palm normal) for a side grasp round a
     vessel's body: a hand whose fingers lie far apart reaches the rim with its middle
     finger while its lowest finger rests on the table, unless its fingers slant down."""
+    soft_contacts: bool = False
+    """Give the hand's geoms the Shadow hand's contact softness (`SOFT_CONTACT`) instead of
+    its file's: LEAP's sets solref 1e-4 s and solimp 0.999, far stiffer than the 4 ms step
+    resolves; a fingertip pressing a ball onto the table then kicked it off at 2-8 m/s
+    (PushSmallSphereObstacleSlope: 4 of 20 episodes 'solved' that way, 18 launched)."""
     retarget: RetargetSpec = RetargetSpec()
 
     def shift_for(self, kind: str | None) -> tuple[float, float, float]:
@@ -230,6 +238,7 @@ HANDS: dict[str, HandSpec] = {
         name="leap",
         retarget=RetargetSpec(tips=(4, 8, 12, 16), scale=1.38),
         grasp_offset=(0.02, -0.035, 0.069),
+        soft_contacts=True,
         # Round a vessel: with the plans' shift (the Shadow hand's) the open fingers start
         # 2 cm inside it, and with the fingers level the middle one curls onto a 10 cm
         # cup's rim while the ring finger rests on the table. Held 1 cm further out along
