@@ -1,6 +1,7 @@
-"""The ball pusher on an arm: the fingertip trails the fast descent behind the ball by
-more than a stuck push trails its command, so the push waits for it to settle; begun
-at once it read as stuck every time and the UR10e and xArm7 never pushed (0.00)."""
+"""The ball pusher (PushSmallSphereObstacleSlope). On an arm the fingertip trails the fast
+descent behind the ball by more than a stuck push trails its command, so the push waits
+for it to settle (begun at once it read as stuck every time: UR10e and xArm7 0.00); a ball
+that veers off is steered back before the posts; a hand's own contacts do not kick it."""
 
 import numpy as np
 import torch
