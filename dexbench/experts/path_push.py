@@ -8,7 +8,8 @@ its knuckle, and its lowest point (measured on the hand) skims just above the ba
 bottom, so it pushes the ball from low behind: higher, the push presses the ball into
 the slope and bends the finger's weak joints back. A ball moves along the line from the
 contact through its centre, so every step the fingertip is put behind the ball on the
-line to a point a little further along the path and pressed on; the line starts from
+line to a point a little further along the path and pressed on (the fingertip: where the
+finger's front meets the ball, measured on its geoms); the line starts from
 where the ball will be shortly (steering on where it is overshoots and weaves). The
 push starts only once the fingertip itself has caught up with its command behind the
 ball: an arm trails the fast descent by ~3 cm, as far as a fingertip stuck on a post
@@ -38,6 +39,7 @@ from dexbench.experts.adapter import (
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import step_towards
 from dexbench.experts.push import PushExpert
+from dexbench.experts.surface import surface_in_palm_frame
 from dexbench.tasks.plans import PathPushPlan
 
 
@@ -70,6 +72,7 @@ BLOCKED = 0.03  # m the fingertip trails its command: stuck (on a post, a rail):
 # trails the fast descent by ~3 cm (a floating wrist by ~1.5), which would read as blocked
 SETTLED = 0.01
 LEAN = 0.45  # rad the pointing finger leans forward from vertical
+BAND = 0.006  # m above and below the ball's centre height: the finger's front is sought there
 POINT = "point"  # the adapter pose: index and thumb open, the other fingers curled
 
 
@@ -122,9 +125,11 @@ class PathPushExpert:
         d[:, 2] = 0.0
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         corners = self._corners(palm, rot) - self.offsets[:, :1]
+        ends = surface_in_palm_frame(self.env, self._palm, self._tips[:1])
         for i in ids:
             self.hang[i], self.lead[i] = self._pusher(i, d[i])
             self.reach[i] = -(corners[i] @ self.hang[i].T)[:, 2].min()
+            self.offsets[i, 0] = self._aim(i, d[i], ends[i])
         self.rot[ids] = rot[ids]
         self.pos[ids] = palm[ids] + np.einsum("nij,nj->ni", rot[ids],
                                               self.offsets[ids, self.lead[ids]])
@@ -145,6 +150,21 @@ class PathPushExpert:
                 if best is None or ahead > best[0]:
                     best = (ahead, rot)
         return best[1], 0
+
+    def _aim(self, i: int, d: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """The pointing finger's point the pusher steers (hand frame): at its tip site's
+        height, but along and across the push where the finger's front (its geoms'
+        extreme points `ends`, hand frame) meets the ball's centre height, one
+        `TIP_RADIUS` back. A tip site is its link's centre of mass: LEAP's lies 3 cm
+        behind and 1.6 cm to the side of the finger's front, so steering the site pushed
+        the ball off its line (floating LEAP 1 of 10 episodes, 10 of 10 so)."""
+        site, points = self.hang[i] @ self.offsets[i, 0], ends @ self.hang[i].T
+        centre = site[2] + self.radius - self.reach[i] - CLEAR
+        level = np.abs(points[:, 2] - centre) < BAND
+        front = points[level][np.argmax(points[level] @ d)]
+        aim = site.copy()
+        aim[:2] = (front - TIP_RADIUS * d)[:2]
+        return aim @ self.hang[i]
 
     @staticmethod
     def _row_yaw() -> float:
