@@ -39,7 +39,7 @@ from dexbench.experts.adapter import (
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import step_towards
 from dexbench.experts.push import PushExpert
-from dexbench.experts.surface import surface_in_palm_frame
+from dexbench.experts.surface import FingerEnds
 from dexbench.tasks.plans import PathPushPlan
 
 
@@ -115,6 +115,7 @@ class PathPushExpert:
         self.last = np.zeros((n, 3))  # the ball's position a control step ago
         self.reach = np.zeros(n)  # m the hanging index reaches below its fingertip site
         self._corners = _corners(env, self._tips[0])
+        self._ends = FingerEnds(env, self._palm, self._tips[:1])
 
     def reset(self, env_ids: torch.Tensor) -> None:
         ids = host_ids(env_ids)
@@ -125,7 +126,7 @@ class PathPushExpert:
         d[:, 2] = 0.0
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         corners = self._corners(palm, rot) - self.offsets[:, :1]
-        ends = surface_in_palm_frame(self.env, self._palm, self._tips[:1])
+        ends = self._ends()
         for i in ids:
             self.hang[i], self.lead[i] = self._pusher(i, d[i])
             self.reach[i] = -(corners[i] @ self.hang[i].T)[:, 2].min()

@@ -28,7 +28,7 @@ from dexbench.experts.adapter import (
 )
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
-from dexbench.experts.surface import surface_in_palm_frame
+from dexbench.experts.surface import FingerEnds
 from dexbench.tasks.plans import PushPlan
 
 SPEED = 0.4  # m/s in the air
@@ -128,7 +128,8 @@ class PushExpert:
         self.yaw = np.zeros(n)
         self.offsets = np.zeros((n, len(self._tips), 3))  # fingertips in the hand frame
         # where the fingertip links end (their geoms' extreme points), in the hand frame
-        self.surface = surface_in_palm_frame(env, self._palm, self._tips)
+        self._ends = FingerEnds(env, self._palm, self._tips)
+        self.surface = np.zeros((n, self._ends.count, 3))
         self.lead = np.zeros(n, dtype=np.int64)
         self.stage = np.full(n, Stage.PLAN)
         self.start = np.zeros((n, 3))  # fingertip before the push (world)
@@ -147,7 +148,7 @@ class PushExpert:
         pos, rot, tips = tips_in_palm_frame(self.env, self._palm, self._tips)
         palm = pos[ids]
         self.offsets[ids] = tips[ids]
-        self.surface[ids] = surface_in_palm_frame(self.env, self._palm, self._tips)[ids]
+        self.surface[ids] = self._ends()[ids]
         self.rot[ids] = rot[ids]
         self.lead[ids] = 0
         self.tip[ids] = palm + np.einsum("nij,nj->ni", rot[ids], self.offsets[ids, 0])

@@ -59,20 +59,27 @@ def body_surface(model: mujoco.MjModel, body: int) -> np.ndarray:
     return np.concatenate(points)
 
 
-def surface_in_palm_frame(env: DexEnv, palm: int, sites: list[int]) -> np.ndarray:
-    """(N, K, 3) the extreme points of the bodies carrying `sites` (fingertips), in the
-    palm site's frame of every env: where the fingers end, whatever the palm's pose."""
-    model = env.scene.model
-    bodies = [int(model.site_bodyid[s]) for s in sites]
-    local = [body_surface(model, b) for b in bodies]
-    pos, rot = site_pose(env, palm)
-    xpos = env.sim.field("xpos").cpu().numpy()[:, bodies]
-    xquat = env.sim.field("xquat").cpu().numpy()[:, bodies]
-    out = []
-    for k, points in enumerate(local):
-        mats = np.zeros((len(pos), 9))
-        for i in range(len(pos)):
-            mujoco.mju_quat2Mat(mats[i], xquat[i, k])
-        world = xpos[:, k, None] + np.einsum("nij,kj->nki", mats.reshape(-1, 3, 3), points)
-        out.append(np.einsum("nji,nkj->nki", rot, world - pos[:, None]))
-    return np.concatenate(out, axis=1)
+class FingerEnds:
+    """The extreme points of the bodies carrying `sites` (fingertips), measured once in
+    their bodies' frames; called, they are given in the palm site's frame of every env
+    (N, K, 3): where the fingers end, whatever the palm's pose."""
+
+    def __init__(self, env: DexEnv, palm: int, sites: list[int]) -> None:
+        model = env.scene.model
+        self.env, self.palm = env, palm
+        self.bodies = [int(model.site_bodyid[s]) for s in sites]
+        self.local = [body_surface(model, b) for b in self.bodies]
+        self.count = sum(len(points) for points in self.local)
+
+    def __call__(self) -> np.ndarray:
+        pos, rot = site_pose(self.env, self.palm)
+        xpos = self.env.sim.field("xpos").cpu().numpy()[:, self.bodies]
+        xquat = self.env.sim.field("xquat").cpu().numpy()[:, self.bodies]
+        out = []
+        for k, points in enumerate(self.local):
+            mats = np.zeros((len(pos), 9))
+            for i in range(len(pos)):
+                mujoco.mju_quat2Mat(mats[i], xquat[i, k])
+            world = xpos[:, k, None] + np.einsum("nij,kj->nki", mats.reshape(-1, 3, 3), points)
+            out.append(np.einsum("nji,nkj->nki", rot, world - pos[:, None]))
+        return np.concatenate(out, axis=1)
