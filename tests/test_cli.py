@@ -10,7 +10,7 @@ from test_tasks import TASK_KINDS
 
 from dexbench.cli.bench import bench_render, bench_sim
 from dexbench.cli.config import ConfigError, load_config
-from dexbench.cli.introspect import inspect
+from dexbench.cli.introspect import entry, inspect
 from dexbench.embodiments.builder import embodiment_names
 from dexbench.tasks.registry import TASKS
 
@@ -19,15 +19,23 @@ def _run(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, *args], capture_output=True, text=True, timeout=300)
 
 
-def test_list_tasks_and_embodiments():
-    tasks = _run("-m", "dexbench", "list", "tasks")
-    assert tasks.returncode == 0
-    rows = [line.split() for line in tasks.stdout.splitlines()]
+def _entry(monkeypatch, capsys, *args: str) -> tuple[int, str]:
+    """`python -m dexbench <args>` in this process (the imports are paid once)."""
+    monkeypatch.setattr(sys, "argv", ["dexbench", *args])
+    with pytest.raises(SystemExit) as done:
+        entry()
+    return done.value.code, capsys.readouterr().out
+
+
+def test_list_tasks_and_embodiments(monkeypatch, capsys):
+    code, out = _entry(monkeypatch, capsys, "list", "tasks")
+    assert code == 0
+    rows = [line.split() for line in out.splitlines()]
     assert sorted(r[0] for r in rows) == sorted(TASKS) and len(rows) == len(TASKS)
     assert {r[0]: r[1] for r in rows}["PushT"] == "nonprehensile"
-    embodiments = _run("-m", "dexbench", "list", "embodiments")
-    names = [line.split()[0] for line in embodiments.stdout.splitlines()]
-    assert names == embodiment_names() and len(names) == 48
+    code, out = _entry(monkeypatch, capsys, "list", "embodiments")
+    names = [line.split()[0] for line in out.splitlines()]
+    assert code == 0 and names == embodiment_names() and len(names) == 48
 
 
 def test_inspect_prints_one_json_object():

@@ -18,6 +18,13 @@ A round vessel (`PourPlan.round_body`) may be held from any side: a hand on an a
 grossly misses the plan's handshake grasp or its pour (the xArm7's reach with the Shadow
 forearm pointing up at the end of the pour) takes the grasp turned about the vessel's
 axis that the arm's IK reaches best.
+
+On an arm, the links that move as one with the hand (the FR3's link 7, behind the palm of
+its flat-mounted hand) may reach below the table at a body grasp low on the vessel: the
+link lands on the table and props the hand off the vessel (FR3 with the Wuji hand: palm
+3 cm above its pose, only the little finger on the can). The palm then rolls about the
+fingers, turned down towards the table, by the least of `ROLLS` that keeps those links
+out of it (a hand with its own wrist, the Shadow hand's, bends there instead: no roll).
 """
 
 from __future__ import annotations
@@ -29,6 +36,7 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 
+from dexbench.embodiments.builder import TABLE_TOP_Z
 from dexbench.embodiments.hand_geometry import hand_geometry
 from dexbench.envs.dex_env import DexEnv
 from dexbench.experts.adapter import nearly_best
@@ -41,6 +49,7 @@ from dexbench.experts.grasp import (
     stand_off,
 )
 from dexbench.experts.motion import turned, way_poses, yawed
+from dexbench.experts.surface import mount_part
 from dexbench.tasks.plans import PourPlan, locate
 from dexbench.tasks.predicates import tilt_deg
 
@@ -55,6 +64,12 @@ TURNS = sorted(np.linspace(-np.pi, np.pi, 12, endpoint=False), key=abs)
 # time where the guess misses it by up to 9.
 GROSS = 10.0
 WAYPOINTS = 4  # poses from the hand's to above the grasp that `_turn_round` checks
+# Rolls (rad) about the fingers a body grasp may take, palm turned down, least first.
+ROLLS = np.linspace(0.0, -0.6, 7)
+# m those links may reach below the table top at the planned grasp: the IK, keeping them
+# `adapter.TABLE_CLEARANCE` above it, then holds the palm at most 2 cm off its pose, which
+# the hook grip takes (the UR10e's and xArm7's grasps of the can, up to 0.7 cm, hold it).
+SINK = 0.01
 
 
 class PourExpert:
@@ -85,6 +100,7 @@ class PourExpert:
         opened, closed = adapter.pose("open"), adapter.pose(plan.grasp.synergy)
         squeezed = np.clip(opened + plan.squeeze * (closed - opened), ranges[:, 0], ranges[:, 1])
         self._grasp_turn = plan.grasp_turn + (hand.vessel_turn if body else 0.0)
+        self._mount_part = mount_part(env, side) if body else np.zeros((0, 3))
         adapter.add_pose(SQUEEZE, _overridden(squeezed, actuators, plan.overrides))
         if plan.open_overrides:
             adapter.add_pose("open", _overridden(opened, actuators, plan.open_overrides))
@@ -104,8 +120,11 @@ class PourExpert:
         # step): keep it, and turn what the grasp expert follows away from it.
         planned = (grasp.phase == Phase.APPROACH) & (grasp.timer <= 1.5 * self._dt)
         self._held_rot[planned] = grasp.grasp_rot[planned]
+        fresh = np.flatnonzero(planned & (grasp.timer > 0.5 * self._dt))
         if self._turn_to_reach:  # once per plan: `GraspExpert` planned on the last step
-            self._turn_round(np.flatnonzero(planned & (grasp.timer > 0.5 * self._dt)))
+            self._turn_round(fresh)
+        if len(self._mount_part):
+            self._roll_clear(fresh)
         carry = grasp.phase == Phase.CARRY
         risen = carry & (grasp.pos[:, 2] > grasp.lift_from[:, 2] + self.plan.clearance)
         # Turn gradually: the hanging vessel must not be flung out of the fingers.
@@ -154,6 +173,23 @@ class PourExpert:
                 if costs[0] < GROSS:
                     break
             self._held_rot[i] = held_rots[nearly_best(costs)]
+
+    def _roll_clear(self, ids: np.ndarray) -> None:
+        """Roll the fresh grasps `ids` about the fingers by the least of `ROLLS` whose
+        grasp pose keeps the mount's links that move with the hand no more than `SINK`
+        below the table top (the highest of them where none does)."""
+        grasp = self.grasp
+        point, _ = grasp.object_point(grasp.body, grasp.point)
+        at_grasp = turned(np.asarray(self.plan.about)[None], self._grasp_turn)[0]
+        rolls = turned(np.repeat([[1.0, 0.0, 0.0]], len(ROLLS), axis=0), ROLLS)
+        for i in ids:
+            rots = self._held_rot[i] @ rolls @ at_grasp
+            palm = point[i] - rots @ grasp.offset
+            clear = palm[:, 2] + np.einsum("kij,pj->kpi", rots, self._mount_part)[..., 2].min(
+                axis=1) - TABLE_TOP_Z
+            above = np.flatnonzero(clear >= -SINK)
+            self._held_rot[i] = self._held_rot[i] @ rolls[above[0] if len(above)
+                                                          else int(np.argmax(clear))]
 
     def _way_in(self, i: int, pos: np.ndarray, rot: np.ndarray
                 ) -> list[tuple[np.ndarray, np.ndarray]]:

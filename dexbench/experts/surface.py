@@ -7,8 +7,9 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from dexbench.embodiments.builder import set_joints
 from dexbench.envs.dex_env import DexEnv
-from dexbench.experts.adapter import collidable, site_pose
+from dexbench.experts.adapter import collidable, site_pose, subtree
 
 _G = mujoco.mjtGeom
 
@@ -83,3 +84,29 @@ class FingerEnds:
             world = xpos[:, k, None] + np.einsum("nij,kj->nki", mats.reshape(-1, 3, 3), points)
             out.append(np.einsum("nji,nkj->nki", rot, world - pos[:, None]))
         return np.concatenate(out, axis=1)
+
+
+def mount_part(env: DexEnv, side: str) -> np.ndarray:
+    """(K, 3) extreme points of the arm's links that move as one with the hand (the
+    FR3's link 7 and flange, behind the palm of its flat-mounted hand), in the palm
+    site's frame at home; (0, 3) on a floating mount and for a hand with a wrist of its
+    own (the Shadow hand's: those links then stand off the palm as the wrist bends). A
+    grasp planned from the hand's own geometry alone may put them into the table."""
+    model, layout = env.scene.model, env.embodiment.sides[side]
+    root = model.body(layout.hand_root).id
+    site = model.site(layout.palm_site).id
+    wrist = model.body_weldid[model.site_bodyid[site]] != model.body_weldid[root]
+    if env.embodiment.mount == "floating" or wrist:
+        return np.zeros((0, 3))
+    data = mujoco.MjData(model)
+    set_joints(model, data, layout.home_qpos)
+    mujoco.mj_kinematics(model, data)
+    hand = subtree(model, root)
+    pos, rot = data.site_xpos[site], data.site_xmat[site].reshape(3, 3)
+    out = [np.zeros((0, 3))]
+    for b in range(model.nbody):
+        if b in hand or model.body_weldid[b] != model.body_weldid[root] or not collidable(model, b):
+            continue
+        world = data.xpos[b] + body_surface(model, b) @ data.xmat[b].reshape(3, 3).T
+        out.append((world - pos) @ rot)
+    return np.concatenate(out)
