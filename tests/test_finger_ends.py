@@ -5,11 +5,13 @@ FR3: 0.15)."""
 
 import mujoco
 import numpy as np
+import pytest
 import torch
 
 from dexbench.envs.dex_env import STATE_SPEC
 from dexbench.eval.seeds import eval_keys
 from dexbench.experts import make_expert
+from dexbench.experts import push as push_module
 from dexbench.experts.push import Stage
 from dexbench.experts.surface import body_surface
 from dexbench.tasks.registry import make_env
@@ -72,3 +74,29 @@ def test_pushing_fingers_do_not_dig_into_the_table():
             depths.append(-min(dists, default=0.0))
     assert len(depths) > 40, "the expert pushed"
     assert np.mean(depths) < 0.0005 and max(depths) < 0.0015, (np.mean(depths), max(depths))
+
+
+def _first_push(embodiment: str):
+    env = make_env("PushT", embodiment, num_envs=1, nthread=1)
+    expert = make_expert(env)
+    env.reset_to(torch.arange(1), eval_keys(0, [0]))
+    expert.reset(torch.arange(1))
+    expert.act()
+    hang = expert._hanging(expert.yaw[:1], expert.tilt[:1], expert.lean[:1])[0]
+    site = hang @ expert.offsets[0, expert.lead[0]]
+    return expert, hang, site, hang @ expert.aim[0], expert.direction[0]
+
+
+def test_the_block_pusher_steers_the_leading_fingers_front_not_its_site():
+    # LEAP's tip site lies ~2 cm behind its finger's front: the push steers the front
+    expert, hang, site, aim, push = _first_push("floating_leap")
+    assert (aim - site) @ push > 0.015 and abs(aim[2] - site[2]) < 1e-9
+    lo, hi = expert._spans[expert.lead[0]]
+    points = expert.surface[0, lo:hi] @ hang.T
+    rise = points[:, 2] - site[2] + push_module.LOW + expert.drop[0]
+    level = (rise >= 0.0) & (rise <= expert.plan.height)
+    front = (points[level] @ push).max()
+    assert front - aim @ push == pytest.approx(push_module.TIP_RADIUS, abs=1e-6)
+    # the Shadow hand's site is near its finger's front: much the same point
+    _, _, site, aim, _ = _first_push("floating_shadow")
+    assert np.linalg.norm(aim - site) < 0.004

@@ -8,10 +8,14 @@ centroid by the push's moment over its radius of gyration squared) predicts the 
 after the push; the push that most reduces the pose error per second (travel included)
 wins. The hand goes there over the block when the straight way would touch it, pushes,
 and plans again. Fingertips are measured on the hand itself, so the script serves every
-hand and mount.
+hand and mount: the push steers the leading finger's front (its geoms' extreme points at
+the block's side), not its tip site, which lies 2 cm behind it on the LEAP hand, and
+judges the push's progress by that point carried with the palm.
 """
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 import torch
@@ -24,6 +28,7 @@ from dexbench.experts.adapter import (
     ActionAdapter,
     HandCommand,
     palm_and_finger_sites,
+    site_pose,
     tips_in_palm_frame,
 )
 from dexbench.experts.base import host_ids
@@ -130,6 +135,9 @@ class PushExpert:
         # where the fingertip links end (their geoms' extreme points), in the hand frame
         self._ends = FingerEnds(env, self._palm, self._tips)
         self.surface = np.zeros((n, self._ends.count, 3))
+        ends = np.cumsum([0] + [len(points) for points in self._ends.local])
+        self._spans = list(itertools.pairwise(ends))  # each finger's rows of `surface`
+        self.aim = np.zeros((n, 3))  # the point the push steers, in the hand frame
         self.lead = np.zeros(n, dtype=np.int64)
         self.stage = np.full(n, Stage.PLAN)
         self.start = np.zeros((n, 3))  # fingertip before the push (world)
@@ -151,7 +159,8 @@ class PushExpert:
         self.surface[ids] = self._ends()[ids]
         self.rot[ids] = rot[ids]
         self.lead[ids] = 0
-        self.tip[ids] = palm + np.einsum("nij,nj->ni", rot[ids], self.offsets[ids, 0])
+        self.aim[ids] = self.offsets[ids, 0]
+        self.tip[ids] = palm + np.einsum("nij,nj->ni", rot[ids], self.aim[ids])
         self.yaw[ids] = 0.0
         self.stage[ids] = Stage.PLAN
         self.ban_timer[ids] = 0.0
@@ -181,8 +190,8 @@ class PushExpert:
         target[down] = self.start[down]
         target[down, 2] = low + self.drop[down]
         push = self.stage == Stage.PUSH
-        actual = self.env.sim.field("site_xpos").cpu().numpy()[:, self._tips][
-            np.arange(len(self.lead)), self.lead]
+        palm_now, rot_now = site_pose(self.env, self._palm)
+        actual = palm_now + np.einsum("nij,nj->ni", rot_now, self.aim)
         # The fingertip gives a little under load: the command runs ahead of it, a bit.
         ahead = ((actual - self.start) * self.direction).sum(axis=1)
         target[push] = self.start[push] + self.direction[push] * np.minimum(
@@ -210,8 +219,7 @@ class PushExpert:
         self.banned[stuck] = self.choice[stuck]
         self.ban_timer[stuck] = BAN_SECONDS
         self.ban_timer -= self.env.control_dt
-        offset = self.offsets[np.arange(len(self.lead)), self.lead]
-        palm = self.tip - np.einsum("nij,nj->ni", self.rot, offset)
+        palm = self.tip - np.einsum("nij,nj->ni", self.rot, self.aim)
         closure = np.zeros(self.env.num_envs)
         return self.adapter.actions({self.side: HandCommand(palm, self.rot, closure)})
 
@@ -306,11 +314,32 @@ class PushExpert:
         self.lean[ids] = self._leans[m]
         self.drop[ids] = drops[rows, j, k, m]
         lead = leads[rows, j, k, m]
-        palm = self.tip[ids] - np.einsum("nij,nj->ni", self.rot[ids],
-                                         self.offsets[ids, self.lead[ids]])
+        palm = self.tip[ids] - np.einsum("nij,nj->ni", self.rot[ids], self.aim[ids])
         self.lead[ids] = lead
-        self.tip[ids] = palm + np.einsum("nij,nj->ni", self.rot[ids],
-                                         self.offsets[ids, lead])
+        hang = self._hanging(self.yaw[ids], self.tilt[ids], self.lean[ids])
+        for r, i in enumerate(ids):
+            self.aim[i] = self._aim(i, hang[r], d[r])
+        self.tip[ids] = palm + np.einsum("nij,nj->ni", self.rot[ids], self.aim[ids])
+
+    def _aim(self, i: int, hang: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """The leading finger's point the push steers (hand frame): at its tip site's
+        height, but along and across the push where the finger's front (its geoms'
+        extreme points) meets the block's side, one `TIP_RADIUS` back. A tip site is its
+        link's centre of mass, not where the finger touches: the planned pushes (a few
+        millimetres at the end) fell short or pushed beside the point on hands whose
+        site sits off the finger's front."""
+        lo, hi = self._spans[self.lead[i]]
+        site = hang @ self.offsets[i, self.lead[i]]
+        points = self.surface[i, lo:hi] @ hang.T
+        rise = points[:, 2] - site[2] + LOW + self.drop[i]  # over the table, pushing
+        level = (rise >= 0.0) & (rise <= self.plan.height)
+        if not level.any():
+            return self.offsets[i, self.lead[i]]
+        push = np.array([d[0], d[1], 0.0])
+        front = points[level][np.argmax(points[level] @ push)]
+        aim = site.copy()
+        aim[:2] = (front - TIP_RADIUS * push)[:2]
+        return hang.T @ aim
 
     def _reach(self, ids: np.ndarray, options: np.ndarray, tilts: np.ndarray,
                leads: np.ndarray, drops: np.ndarray) -> np.ndarray:
