@@ -91,7 +91,7 @@ def test_the_block_pusher_steers_the_leading_fingers_front_not_its_site():
     # LEAP's tip site lies ~2 cm behind its finger's front: the push steers the front
     expert, hang, site, aim, push = _first_push("floating_leap")
     assert (aim - site) @ push > 0.015 and abs(aim[2] - site[2]) < 1e-9
-    lo, hi = expert._spans[expert.lead[0]]
+    lo, hi = expert._ends.rows[expert.lead[0]]
     points = expert.surface[0, lo:hi] @ hang.T
     rise = points[:, 2] - site[2] + push_module.LOW + expert.drop[0]
     level = (rise >= 0.0) & (rise <= expert.plan.height)

@@ -13,12 +13,34 @@ from dexbench.experts.path_push import BLOCKED, SETTLED, Phase
 from dexbench.tasks.registry import make_env
 
 
-def test_arm_pushes_the_ball_up_the_slope_once_its_fingertip_settles():
-    env = make_env("PushSmallSphereObstacleSlope", "ur10e_sharpa", num_envs=1, seed=0,
+def _start(embodiment: str, episodes: list[int]):
+    """The ball-push task on `embodiment` at these evaluation episodes, and its expert."""
+    env = make_env("PushSmallSphereObstacleSlope", embodiment, num_envs=len(episodes), seed=0,
                    nthread=1)
-    env.reset_to(torch.arange(1), eval_keys(0, [0]))
+    env.reset_to(torch.arange(len(episodes)), eval_keys(0, episodes))
     expert = make_expert(env)
-    expert.reset(torch.arange(1))
+    expert.reset(torch.arange(len(episodes)))
+    return env, expert
+
+
+def _run(env, expert, watch=None) -> np.ndarray:
+    """(N,) which episodes the expert solves, run to their ends; `watch(ended)` is called
+    after every step."""
+    ended = np.zeros(env.num_envs, dtype=bool)
+    solved = np.zeros(env.num_envs, dtype=bool)
+    for _ in range(1200):
+        _, _, terminated, truncated, _ = env.step(expert.act())
+        solved |= terminated.numpy() & ~ended
+        ended |= (terminated | truncated).numpy()
+        if watch is not None:
+            watch(ended)
+        if ended.all():
+            break
+    return solved
+
+
+def test_arm_pushes_the_ball_up_the_slope_once_its_fingertip_settles():
+    env, expert = _start("ur10e_sharpa", [0])
     start = env.task.past(env.view)[0].item()
     lags, pushes, aborted = [], [], 0
     for _ in range(300):
@@ -42,11 +64,7 @@ def test_arm_keeps_the_ball_on_its_line_between_the_posts():
     """xArm7 episode 2: the fingertip sat ~5 mm across the push from its command, the
     ball weaved 6 cm off the centre line onto a post and stayed jammed there; with the
     offset taken out of the command it goes between the posts and over the crest."""
-    env = make_env("PushSmallSphereObstacleSlope", "xarm7_sharpa", num_envs=1, seed=0,
-                   nthread=1)
-    env.reset_to(torch.arange(1), eval_keys(0, [2]))
-    expert = make_expert(env)
-    expert.reset(torch.arange(1))
+    env, expert = _start("xarm7_sharpa", [2])
     for _ in range(600):
         env.step(expert.act())
         if env.task.success(env.view)[0]:
@@ -59,11 +77,7 @@ def test_ball_that_veers_off_is_steered_back_before_the_posts():
     the slope; steered at a point 10 cm along the line it came back too late and ran onto
     a post (0 of 4), steered at 5 cm it goes between them and over the crest."""
     episodes = [10, 16, 17, 18]
-    env = make_env("PushSmallSphereObstacleSlope", "floating_inspire", num_envs=len(episodes),
-                   seed=0, nthread=1)
-    env.reset_to(torch.arange(len(episodes)), eval_keys(0, episodes))
-    expert = make_expert(env)
-    expert.reset(torch.arange(len(episodes)))
+    env, expert = _start("floating_inspire", episodes)
     solved = torch.zeros(len(episodes), dtype=torch.bool)
     for _ in range(1200):
         env.step(expert.act())
@@ -81,27 +95,19 @@ def test_leap_pushes_the_ball_over_the_crest_without_kicking_it():
     rolls, but steered by the tip site, 3 cm behind and 1.6 cm beside the finger's front,
     it ran off its line (none solved). Steered by the finger's front: all three, the
     ball under 1.5 m/s."""
-    episodes = [0, 2, 7]
-    env = make_env("PushSmallSphereObstacleSlope", "floating_leap", num_envs=len(episodes),
-                   seed=0, nthread=1)
-    env.reset_to(torch.arange(len(episodes)), eval_keys(0, episodes))
-    expert = make_expert(env)
-    expert.reset(torch.arange(len(episodes)))
+    env, expert = _start("floating_leap", [0, 2, 7])
     last = env.view.body_pos("sphere").numpy().copy()
-    fastest = np.zeros(len(episodes))
-    ended = np.zeros(len(episodes), dtype=bool)
-    solved = np.zeros(len(episodes), dtype=bool)
-    for _ in range(1200):
-        _, _, terminated, truncated, _ = env.step(expert.act())
+    fastest = np.zeros(env.num_envs)
+
+    def watch(ended: np.ndarray) -> None:
+        nonlocal last, fastest
         ball = env.view.body_pos("sphere").numpy()
         speed = np.linalg.norm(ball - last, axis=1) / env.control_dt
         last = ball.copy()
-        solved |= terminated.numpy() & ~ended
-        ended |= (terminated | truncated).numpy()
         on_table = ball[:, 2] > 0.6  # a ball rolled off the edge falls at ~3.4 m/s
         fastest = np.where(ended | ~on_table, fastest, np.maximum(fastest, speed))
-        if ended.all():
-            break
+
+    solved = _run(env, expert, watch)
     assert fastest.max() < 1.5, f"ball speeds {fastest.round(2).tolist()} m/s"
     assert solved.all(), f"solved {solved.tolist()}"
 
@@ -109,20 +115,7 @@ def test_leap_pushes_the_ball_over_the_crest_without_kicking_it():
 def test_wuji_pushes_the_ball_with_its_finger_just_clear_of_the_table():
     """The pushing finger's lowest point rides `CLEAR` above the ball's bottom, measured on
     the finger's geoms: measured on their bounding boxes instead, it rode 2.6-5.5 mm
-    higher by hand, and the Wuji finger (4.8 mm) went over the ball in these episodes
-    (floating Wuji: 2 of episodes 0-9 solved, none of these three)."""
-    episodes = [1, 3, 5]
-    env = make_env("PushSmallSphereObstacleSlope", "floating_wuji", num_envs=len(episodes),
-                   seed=0, nthread=1)
-    env.reset_to(torch.arange(len(episodes)), eval_keys(0, episodes))
-    expert = make_expert(env)
-    expert.reset(torch.arange(len(episodes)))
-    ended = np.zeros(len(episodes), dtype=bool)
-    solved = np.zeros(len(episodes), dtype=bool)
-    for _ in range(1200):
-        _, _, terminated, truncated, _ = env.step(expert.act())
-        solved |= terminated.numpy() & ~ended
-        ended |= (terminated | truncated).numpy()
-        if ended.all():
-            break
+    higher by hand (the Wuji finger 4.8 mm), and floating Wuji solved 2 of episodes 0-9,
+    none of these three."""
+    solved = _run(*_start("floating_wuji", [1, 3, 5]))
     assert solved.all(), solved

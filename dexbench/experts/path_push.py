@@ -37,8 +37,8 @@ from dexbench.experts.adapter import (
 )
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import step_towards
-from dexbench.experts.push import PushExpert
-from dexbench.experts.surface import FingerEnds
+from dexbench.experts.push import TIP_RADIUS, PushExpert
+from dexbench.experts.surface import FingerEnds, front_aim
 from dexbench.tasks.plans import PathPushPlan
 
 
@@ -52,7 +52,6 @@ class Phase(IntEnum):
 SPEED = 0.4  # m/s in the air
 PUSH_SPEED = 0.06  # m/s of the fingertip while pushing
 TURN_RATE = 3.0  # rad/s
-TIP_RADIUS = 0.01  # m
 PRESS = 0.015  # m the command leads the fingertip into the ball
 # m along the path: where the ball is steered towards. Near, so a ball that veered off
 # (a finger's abduction gives under the push) turns back onto the line before the posts:
@@ -154,19 +153,14 @@ class PathPushExpert:
         return best[1], 0
 
     def _aim(self, i: int, d: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        """The pointing finger's point the pusher steers (hand frame): at its tip site's
-        height, but along and across the push where the finger's front (its geoms'
-        extreme points `ends`, hand frame) meets the ball's centre height, one
-        `TIP_RADIUS` back. A tip site is its link's centre of mass: LEAP's lies 3 cm
-        behind and 1.6 cm to the side of the finger's front, so steering the site pushed
-        the ball off its line (floating LEAP 1 of 10 episodes, 10 of 10 so)."""
+        """The pointing finger's point the pusher steers (hand frame; `surface.front_aim`):
+        its front (its geoms' extreme points `ends`, hand frame) where it meets the ball's
+        centre height. Steering the tip site, 3 cm behind and 1.6 cm to the side of LEAP's
+        front, pushed the ball off its line (floating LEAP 1 of 10 episodes, 10 of 10 so)."""
         site, points = self.hang[i] @ self.offsets[i, 0], ends @ self.hang[i].T
         centre = site[2] + self.radius - self.reach[i] - CLEAR
         level = np.abs(points[:, 2] - centre) < BAND
-        front = points[level][np.argmax(points[level] @ d)]
-        aim = site.copy()
-        aim[:2] = (front - TIP_RADIUS * d)[:2]
-        return aim @ self.hang[i]
+        return front_aim(site, points, level, d, TIP_RADIUS) @ self.hang[i]
 
     @staticmethod
     def _row_yaw() -> float:

@@ -101,6 +101,9 @@ class PourExpert:
         squeezed = np.clip(opened + plan.squeeze * (closed - opened), ranges[:, 0], ranges[:, 1])
         self._grasp_turn = plan.grasp_turn + (hand.vessel_turn if body else 0.0)
         self._mount_part = mount_part(env, side) if body else np.zeros((0, 3))
+        # the turns `_roll_clear` tries, and the grasp's own turn after them
+        self._rolls = turned(np.repeat([[1.0, 0.0, 0.0]], len(ROLLS), axis=0), ROLLS)
+        self._at_grasp = turned(np.asarray(plan.about)[None], self._grasp_turn)[0]
         adapter.add_pose(SQUEEZE, _overridden(squeezed, actuators, plan.overrides))
         if plan.open_overrides:
             adapter.add_pose("open", _overridden(opened, actuators, plan.open_overrides))
@@ -180,16 +183,14 @@ class PourExpert:
         below the table top (the highest of them where none does)."""
         grasp = self.grasp
         point, _ = grasp.object_point(grasp.body, grasp.point)
-        at_grasp = turned(np.asarray(self.plan.about)[None], self._grasp_turn)[0]
-        rolls = turned(np.repeat([[1.0, 0.0, 0.0]], len(ROLLS), axis=0), ROLLS)
         for i in ids:
-            rots = self._held_rot[i] @ rolls @ at_grasp
+            rots = self._held_rot[i] @ self._rolls @ self._at_grasp
             palm = point[i] - rots @ grasp.offset
             clear = palm[:, 2] + np.einsum("kij,pj->kpi", rots, self._mount_part)[..., 2].min(
                 axis=1) - TABLE_TOP_Z
             above = np.flatnonzero(clear >= -SINK)
-            self._held_rot[i] = self._held_rot[i] @ rolls[above[0] if len(above)
-                                                          else int(np.argmax(clear))]
+            self._held_rot[i] = self._held_rot[i] @ self._rolls[above[0] if len(above)
+                                                                else int(np.argmax(clear))]
 
     def _way_in(self, i: int, pos: np.ndarray, rot: np.ndarray
                 ) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -15,8 +15,6 @@ judges the push's progress by that point carried with the palm.
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import torch
 
@@ -33,7 +31,7 @@ from dexbench.experts.adapter import (
 )
 from dexbench.experts.base import host_ids
 from dexbench.experts.motion import body_yaw, palm_down, pitch_down, step_towards, wrap
-from dexbench.experts.surface import FingerEnds
+from dexbench.experts.surface import FingerEnds, front_aim
 from dexbench.tasks.plans import PushPlan
 
 SPEED = 0.4  # m/s in the air
@@ -135,8 +133,6 @@ class PushExpert:
         # where the fingertip links end (their geoms' extreme points), in the hand frame
         self._ends = FingerEnds(env, self._palm, self._tips)
         self.surface = np.zeros((n, self._ends.count, 3))
-        ends = np.cumsum([0] + [len(points) for points in self._ends.local])
-        self._spans = list(itertools.pairwise(ends))  # each finger's rows of `surface`
         self.aim = np.zeros((n, 3))  # the point the push steers, in the hand frame
         self.lead = np.zeros(n, dtype=np.int64)
         self.stage = np.full(n, Stage.PLAN)
@@ -322,24 +318,15 @@ class PushExpert:
         self.tip[ids] = palm + np.einsum("nij,nj->ni", self.rot[ids], self.aim[ids])
 
     def _aim(self, i: int, hang: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """The leading finger's point the push steers (hand frame): at its tip site's
-        height, but along and across the push where the finger's front (its geoms'
-        extreme points) meets the block's side, one `TIP_RADIUS` back. A tip site is its
-        link's centre of mass, not where the finger touches: the planned pushes (a few
-        millimetres at the end) fell short or pushed beside the point on hands whose
-        site sits off the finger's front."""
-        lo, hi = self._spans[self.lead[i]]
+        """The leading finger's point the push steers (hand frame; `surface.front_aim`):
+        its front where it meets the block's side. Steering the tip site, the planned
+        pushes (a few millimetres at the end) fell short or went beside their point."""
+        lo, hi = self._ends.rows[self.lead[i]]
         site = hang @ self.offsets[i, self.lead[i]]
         points = self.surface[i, lo:hi] @ hang.T
         rise = points[:, 2] - site[2] + LOW + self.drop[i]  # over the table, pushing
         level = (rise >= 0.0) & (rise <= self.plan.height)
-        if not level.any():
-            return self.offsets[i, self.lead[i]]
-        push = np.array([d[0], d[1], 0.0])
-        front = points[level][np.argmax(points[level] @ push)]
-        aim = site.copy()
-        aim[:2] = (front - TIP_RADIUS * push)[:2]
-        return hang.T @ aim
+        return hang.T @ front_aim(site, points, level, np.array([d[0], d[1], 0.0]), TIP_RADIUS)
 
     def _reach(self, ids: np.ndarray, options: np.ndarray, tilts: np.ndarray,
                leads: np.ndarray, drops: np.ndarray) -> np.ndarray:

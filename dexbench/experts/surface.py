@@ -4,6 +4,8 @@ centre of mass, 1.5-3 cm short of its end, by hand)."""
 
 from __future__ import annotations
 
+import itertools
+
 import mujoco
 import numpy as np
 
@@ -71,6 +73,8 @@ class FingerEnds:
         self.bodies = [int(model.site_bodyid[s]) for s in sites]
         self.local = [body_surface(model, b) for b in self.bodies]
         self.count = sum(len(points) for points in self.local)
+        rows = np.cumsum([0] + [len(points) for points in self.local])
+        self.rows = list(itertools.pairwise(rows))  # each body's rows in what a call gives
 
     def __call__(self) -> np.ndarray:
         pos, rot = site_pose(self.env, self.palm)
@@ -84,6 +88,21 @@ class FingerEnds:
             world = xpos[:, k, None] + np.einsum("nij,kj->nki", mats.reshape(-1, 3, 3), points)
             out.append(np.einsum("nji,nkj->nki", rot, world - pos[:, None]))
         return np.concatenate(out, axis=1)
+
+
+def front_aim(site: np.ndarray, points: np.ndarray, level: np.ndarray, push: np.ndarray,
+              radius: float) -> np.ndarray:
+    """(3,) the point a pushing finger steers: at its tip `site`'s height, but along and
+    across the horizontal `push` where its front (the farthest of its extreme `points`
+    along it, among those at `level`, a mask) is, `radius` back; `site` where no point is
+    at level. A tip site is its link's centre of mass, not where the finger touches (LEAP's
+    lies 2-3 cm behind its front). All in one frame with z up."""
+    if not level.any():
+        return site
+    front = points[level][np.argmax(points[level] @ push)]
+    aim = site.copy()
+    aim[:2] = (front - radius * push)[:2]
+    return aim
 
 
 def mount_part(env: DexEnv, side: str) -> np.ndarray:
