@@ -88,6 +88,14 @@ def test_sharpa_takes_the_cup_by_its_rim_at_its_own_place():
     assert _solved("RetrieveCup", "floating_sharpa", seed=1, enough=4) == 4
 
 
+def test_leap_takes_the_hammer_nearer_its_wrist():
+    """`HandSpec.shifts["tool"]`: at the Shadow hand's place on the handle the closing
+    LEAP fingers knock the standing hammer over and none of these four nails is driven;
+    2.5 cm towards the wrist, all four."""
+    keys = eval_keys(0, [0, 2, 4, 6])
+    assert _solved("FunctionalHammerStrike", "floating_leap", seed=0, enough=4, keys=keys) == 4
+
+
 def test_push_expert_leans_the_fingers_where_the_arm_cannot_hang_them():
     """PushT on the FR3: with the fingers straight down the arm missed the far pushes by
     ~10 cm; leaning them out where it cannot reach (`LEANS`), these 4 are solved (2 of
