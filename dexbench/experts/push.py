@@ -314,10 +314,10 @@ class PushExpert:
         self.lead[ids] = lead
         hang = self._hanging(self.yaw[ids], self.tilt[ids], self.lean[ids])
         for r, i in enumerate(ids):
-            self.aim[i] = self._aim(i, hang[r], d[r])
+            self.aim[i] = self._aim(i, hang[r], push[r])
         self.tip[ids] = palm + np.einsum("nij,nj->ni", self.rot[ids], self.aim[ids])
 
-    def _aim(self, i: int, hang: np.ndarray, d: np.ndarray) -> np.ndarray:
+    def _aim(self, i: int, hang: np.ndarray, push: np.ndarray) -> np.ndarray:
         """The leading finger's point the push steers (hand frame; `surface.front_aim`):
         its front where it meets the block's side. Steering the tip site, the planned
         pushes (a few millimetres at the end) fell short or went beside their point."""
@@ -326,7 +326,7 @@ class PushExpert:
         points = self.surface[i, lo:hi] @ hang.T
         rise = points[:, 2] - site[2] + LOW + self.drop[i]  # over the table, pushing
         level = (rise >= 0.0) & (rise <= self.plan.height)
-        return hang.T @ front_aim(site, points, level, np.array([d[0], d[1], 0.0]), TIP_RADIUS)
+        return hang.T @ front_aim(site, points, level, push, TIP_RADIUS)
 
     def _reach(self, ids: np.ndarray, options: np.ndarray, tilts: np.ndarray,
                leads: np.ndarray, drops: np.ndarray) -> np.ndarray:
