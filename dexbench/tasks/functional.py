@@ -26,6 +26,11 @@ THUMB_BACK = ((r"_thumb_CMC_FE_ctrl$", -0.17), (r"_thumb_MCP_FE_ctrl$", -0.52),
               (r"_thumb_(CMC|MCP)_AA_ctrl$", -0.35))
 
 
+# Where a held mug's handle may lie (`handle_between`): anywhere but between the palm and
+# the mug.
+MUG_HANDLE = (-0.3, 1.25 * math.pi)
+
+
 def body_pour(vessel: str, outlet: str) -> PourPlan:
     """Pour a handle-less vessel 10 cm tall (cup, can) held round its body: as the mug, but
     held at 4 cm and 1 cm further out along the fingers (the thumb's base would reach the
@@ -59,10 +64,10 @@ class FunctionalPourMug(PourTask):
     # turn, a firm grip (Sharpa's, Wuji's) holds it at the turn (100 left it at 90).
     expert = PourPlan(
         GraspPlan("mug", point=(0.0, 0.0, 0.045), shift=(-0.01, 0.0, -0.015), yaw="body",
-                  yaw_offset=handle_between("mug", -0.3, 1.25 * math.pi), side=True,
+                  yaw_offset=handle_between("mug", *MUG_HANDLE), side=True,
                   synergy="hook", target=task_goal, goal_point="rim", hand_shift="vessel"),
         tilt=1.75, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17,
-        overrides=KEEP_OFF_RIM, tip=110.0, further=0.35)
+        overrides=KEEP_OFF_RIM, tip=110.0, further=0.35, round_body=True, handle=MUG_HANDLE)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"mug": procedural.add_mug(spec, "mug")}

@@ -59,6 +59,12 @@ def turnable_offset(body: str, final_yaw: EnvFn, offsets: tuple[float, float]) -
     return offset
 
 
+def handle_clear(rel: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Whether a handle at `rel` (rad, from the fingers' direction towards the palm's
+    facing direction) lies between `lo` and `hi` (`handle_between`'s)."""
+    return (np.asarray(rel) - lo) % (2 * np.pi) <= hi - lo
+
+
 def handle_between(body: str, lo: float, hi: float) -> EnvFn:
     """Grasp yaw offsets (N,) from `body`'s yaw (its handle along body +x) that put the
     handle between `lo` and `hi` (rad, `lo` < `hi` < `lo` + 2 pi; from the fingers'
@@ -428,7 +434,10 @@ class PourPlan:
     fingers only once the hand is turned over.)
     A `round_body` vessel (a cup, a can: round about its vertical axis) may be held from any
     side: a hand whose mount grossly misses the plan's grasp or pour (an arm's reach and
-    wrist limits) takes the turn about that axis its mount reaches best."""
+    wrist limits) takes the turn about that axis its mount reaches best. A round body with
+    a handle (the mug) names where the handle may lie, `handle` = (`lo`, `hi`) as
+    `handle_between`'s (the plan's grasp yaw is that function's): only turns that keep it
+    there are taken."""
 
     grasp: GraspPlan
     tilt: float
@@ -442,6 +451,7 @@ class PourPlan:
     tip: float | None = None
     further: float = 0.0
     round_body: bool = False
+    handle: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
