@@ -13,6 +13,7 @@ from dexbench.experts import make_expert
 from dexbench.experts.adapter import ActionAdapter, HandCommand
 from dexbench.experts.motion import palm_down, turned
 from dexbench.experts.push import inside_rects, outline
+from dexbench.tasks.plans import body_yaw
 from dexbench.tasks.registry import TASKS, make_env
 
 
@@ -294,3 +295,25 @@ def test_carrying_to_the_goal_leaves_the_tasks_goal_where_it_was_sampled():
     for _ in range(300):
         env.step(expert.act())
     assert torch.equal(env.view.goal, sampled)
+
+
+def test_arm_turns_the_mug_grasp_only_where_the_handle_stays_clear():
+    """`PourPlan.handle`: on an arm the mug's body grasp may turn about its axis like a
+    can's, to where the arm reaches best, but never so far that the handle comes between
+    the palm and the mug (`MUG_HANDLE` leaves it at least ~40 deg off that line). Without
+    the handle filter, fr3_wuji's episodes 1 and 6 here turned the handle to 15 deg of it."""
+    env = make_env("FunctionalPourMug", "fr3_wuji", num_envs=8, seed=0, nthread=1)
+    env.reset_to(torch.arange(8), eval_keys(0, list(range(8))))
+    expert = make_expert(env)
+    expert.reset(torch.arange(8))
+    for _ in range(3):  # the grasp is planned (and turned) on the approach's second step
+        env.step(expert.act())
+    held = expert._held_rot
+    yaw = body_yaw(env.view.body_quat("mug").cpu().numpy())  # the handle along mug +x
+    handle = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+    to_palm = -held[:, :2, 2] / np.linalg.norm(held[:, :2, 2], axis=1, keepdims=True)
+    off = np.degrees(np.arccos(np.clip((handle * to_palm).sum(axis=1), -1.0, 1.0)))
+    assert off.min() > 40.0, off
+    fingers = np.arctan2(held[:, 1, 0], held[:, 0, 0])
+    turn = (fingers - yaw - expert.plan.grasp.yaw_offset(env) + np.pi) % (2 * np.pi) - np.pi
+    assert (np.abs(turn) > 0.1).any(), "no grasp turned: the test no longer checks the filter"
