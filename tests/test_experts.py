@@ -97,6 +97,14 @@ def test_leap_takes_the_hammer_nearer_its_wrist():
     assert _solved("FunctionalHammerStrike", "floating_leap", seed=0, enough=4, keys=keys) == 4
 
 
+def test_leap_holds_the_cup_round_its_body_nearer_its_palm():
+    """`HandSpec.shifts["vessel"]`: 1 cm further out along the LEAP fingers the cup of
+    these four episodes is not lifted and poured (0 of 4); at the palm's side of that,
+    all four."""
+    keys = eval_keys(0, [0, 2, 3, 5])
+    assert _solved("GraspCup", "floating_leap", seed=0, enough=4, keys=keys) == 4
+
+
 def test_push_expert_leans_the_fingers_where_the_arm_cannot_hang_them():
     """PushT on the FR3: with the fingers straight down the arm missed the far pushes by
     ~10 cm; leaning them out where it cannot reach (`LEANS`), these 4 are solved (2 of
