@@ -105,6 +105,14 @@ def test_leap_holds_the_cup_round_its_body_nearer_its_palm():
     assert _solved("GraspCup", "floating_leap", seed=0, enough=4, keys=keys) == 4
 
 
+def test_inspire_takes_the_cup_rim_off_its_thumb_on_the_fr3():
+    """`HandSpec.shifts["rim"]`: at the Shadow hand's place on the rim the FR3's Inspire
+    hand sets these four cups down too tilted to stand (0 of 4); 1.5 cm along hand -y,
+    all four stand on the goal."""
+    keys = eval_keys(0, [0, 1, 3, 7])
+    assert _solved("RetrieveCup", "fr3_inspire", seed=0, enough=4, keys=keys) == 4
+
+
 def test_push_expert_leans_the_fingers_where_the_arm_cannot_hang_them():
     """PushT on the FR3: with the fingers straight down the arm missed the far pushes by
     ~10 cm; leaning them out where it cannot reach (`LEANS`), these 4 are solved (2 of

@@ -354,6 +354,13 @@ HANDS: dict[str, HandSpec] = {
         retarget=RetargetSpec(scale=0.87),
         grasp_offset=(0.108, -0.015, 0.049),
         bar_yaw=0.4,
+        # RetrieveCup (the rim): at the Shadow hand's place the cup, held tilted 10-15 deg,
+        # slips round the thumb (pressed into the rim) on the arms' carry and is set down
+        # too tilted to stand. 1.5 cm along hand -y: searched on fr3_inspire (x, y, z
+        # +-0.01, then y -0.005..-0.02; episodes 0-7: y 0 4 of 8, -0.005 5, -0.01 and
+        # -0.02 8); episodes 0-19 on the FR3 9 -> 17 of 20; episodes 0-11 floating 12 of
+        # 12, UR10e 8 -> 10, xArm7 8 -> 11.
+        shifts={"rim": (0.0, -0.015, 0.0)},
         collection="inspire_hand",
         sides={"right": _inspire_side("right"), "left": _inspire_side("left")},
         synergies={
