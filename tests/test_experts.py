@@ -113,6 +113,13 @@ def test_inspire_takes_the_cup_rim_off_its_thumb_on_the_fr3():
     assert _solved("RetrieveCup", "fr3_inspire", seed=0, enough=4, keys=keys) == 4
 
 
+def test_wuji_holds_the_hammer_further_from_its_palm_on_the_fr3():
+    """`HandSpec.shifts["tool"]`: 1.2 cm off the palm the FR3's Wuji hand drives none of
+    these four nails; 2.7 cm off, all four."""
+    keys = eval_keys(0, [0, 4, 5, 6])
+    assert _solved("FunctionalHammerStrike", "fr3_wuji", seed=0, enough=4, keys=keys) == 4
+
+
 def test_push_expert_leans_the_fingers_where_the_arm_cannot_hang_them():
     """PushT on the FR3: with the fingers straight down the arm missed the far pushes by
     ~10 cm; leaning them out where it cannot reach (`LEANS`), these 4 are solved (2 of
