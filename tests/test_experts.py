@@ -321,9 +321,10 @@ def test_carrying_to_the_goal_leaves_the_tasks_goal_where_it_was_sampled():
 
 
 def test_arm_turns_the_mug_grasp_only_where_the_handle_stays_clear():
-    """`PourPlan.handle`: on an arm the mug's body grasp may turn about its axis like a
-    can's, to where the arm reaches best, but never so far that the handle comes between
-    the palm and the mug (`MUG_HANDLE` leaves it at least ~40 deg off that line). Without
+    """`PourPlan.round_body` with a `HandleBetween` grasp yaw: on an arm the mug's body
+    grasp may turn about its axis like a can's, to where the arm reaches best, but never
+    so far that the handle comes between the palm and the mug (the mug's range leaves it
+    at least ~40 deg off that line). Without
     the handle filter, fr3_wuji's episodes 1 and 6 here turned the handle to 15 deg of it."""
     env = make_env("FunctionalPourMug", "fr3_wuji", num_envs=8, seed=0, nthread=1)
     env.reset_to(torch.arange(8), eval_keys(0, list(range(8))))

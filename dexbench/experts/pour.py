@@ -50,7 +50,7 @@ from dexbench.experts.grasp import (
 )
 from dexbench.experts.motion import turned, way_poses, yawed
 from dexbench.experts.surface import mount_part
-from dexbench.tasks.plans import PourPlan, handle_clear, locate
+from dexbench.tasks.plans import HandleBetween, PourPlan, locate
 from dexbench.tasks.predicates import tilt_deg
 
 SQUEEZE = "pour_squeeze"  # the pose name this expert adds to its own adapter
@@ -152,20 +152,22 @@ class PourExpert:
         plan's own turn stays unless missed by `GROSS` or more; an arm's wrist limits may
         forbid it (the handshake grasp of a cup tipped
         115 deg over its fingertips, the Shadow forearm then pointing up). A vessel with a
-        handle (`PourPlan.handle`) is turned only where its handle stays clear."""
+        handle (its grasp yaw a `HandleBetween`) is turned only where the handle may lie."""
+        if not len(ids):
+            return
         grasp, plan = self.grasp, self.plan
         point, _ = grasp.object_point(grasp.body, grasp.point)
         rim, _ = grasp.object_point(grasp.goal_body, grasp.goal_point)
         goal = (rim + [0.0, 0.0, plan.grasp.lift] if plan.grasp.target is None
                 else np.asarray(plan.grasp.target(grasp.env), dtype=float))
         about = np.asarray(plan.about)
-        # the handle's place from the fingers at the plan's grasp (`handle_between`)
-        handle = (None if plan.handle is None
-                  else -np.asarray(plan.grasp.yaw_offset(grasp.env), dtype=float))
+        between = plan.grasp.yaw_offset
+        # where a mug's handle lies from the fingers at the plan's own grasp
+        handle = -between(grasp.env) if isinstance(between, HandleBetween) else None
         for i in ids:
             held_rots, costs = [], []
             turns = (TURNS if handle is None else
-                     [t for t in TURNS if handle_clear(handle[i] - t, *plan.handle)])
+                     [t for t in TURNS if between.clear(handle[i] - t)])
             for turn in turns:
                 held = yawed(self._held_rot[i], np.array([turn]))
                 axis = held @ about

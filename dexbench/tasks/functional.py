@@ -13,7 +13,7 @@ from dexbench.assets import procedural, vessels
 from dexbench.assets.objects import ObjectInfo
 from dexbench.envs.task_api import SceneView
 from dexbench.tasks.catalog import register
-from dexbench.tasks.plans import GraspPlan, PourPlan, handle_between, object_point, task_goal
+from dexbench.tasks.plans import GraspPlan, HandleBetween, PourPlan, object_point, task_goal
 from dexbench.tasks.templates import Placement, PourTask, uniform_points
 
 # Shadow hand, side grasp round a vessel: the index finger stays open and the thumb swings
@@ -24,11 +24,6 @@ KEEP_OFF_RIM = ((r"FFJ", 0.0), (r"THJ5$", -1.05), (r"THJ4$", 1.22))
 # palm (left open, it stands 3 cm off the palm, into a tall vessel's side or shoulder).
 THUMB_BACK = ((r"_thumb_CMC_FE_ctrl$", -0.17), (r"_thumb_MCP_FE_ctrl$", -0.52),
               (r"_thumb_(CMC|MCP)_AA_ctrl$", -0.35))
-
-
-# Where a held mug's handle may lie (`handle_between`): anywhere but between the palm and
-# the mug.
-MUG_HANDLE = (-0.3, 1.25 * math.pi)
 
 
 def body_pour(vessel: str, outlet: str) -> PourPlan:
@@ -64,10 +59,10 @@ class FunctionalPourMug(PourTask):
     # turn, a firm grip (Sharpa's, Wuji's) holds it at the turn (100 left it at 90).
     expert = PourPlan(
         GraspPlan("mug", point=(0.0, 0.0, 0.045), shift=(-0.01, 0.0, -0.015), yaw="body",
-                  yaw_offset=handle_between("mug", *MUG_HANDLE), side=True,
+                  yaw_offset=HandleBetween("mug", -0.3, 1.25 * math.pi), side=True,
                   synergy="hook", target=task_goal, goal_point="rim", hand_shift="vessel"),
         tilt=1.75, turn_rate=0.8, squeeze=2.0, grasp_turn=0.17,
-        overrides=KEEP_OFF_RIM, tip=110.0, further=0.35, round_body=True, handle=MUG_HANDLE)
+        overrides=KEEP_OFF_RIM, tip=110.0, further=0.35, round_body=True)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
         return {"mug": procedural.add_mug(spec, "mug")}

@@ -59,25 +59,31 @@ def turnable_offset(body: str, final_yaw: EnvFn, offsets: tuple[float, float]) -
     return offset
 
 
-def handle_clear(rel: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Whether a handle at `rel` (rad, from the fingers' direction towards the palm's
-    facing direction) lies between `lo` and `hi` (`handle_between`'s)."""
-    return (np.asarray(rel) - lo) % (2 * np.pi) <= hi - lo
-
-
-def handle_between(body: str, lo: float, hi: float) -> EnvFn:
+@dataclass(frozen=True)
+class HandleBetween:
     """Grasp yaw offsets (N,) from `body`'s yaw (its handle along body +x) that put the
     handle between `lo` and `hi` (rad, `lo` < `hi` < `lo` + 2 pi; from the fingers'
     direction towards the palm's facing direction; the handle cannot lie between the
     palm and the vessel), the fingers along world +x where the handle allows it, else
     the nearer end: a hand reaching far round to the side or back towards its own base
-    turns the vessel poorly."""
-    def offset(env: DexEnv) -> np.ndarray:
-        past_lo = (body_yaw(env.view.body_quat(body).cpu().numpy()) - lo) % (2 * np.pi)
-        nearer_lo = past_lo - (hi - lo) > 2 * np.pi - past_lo
-        rel = np.where(past_lo <= hi - lo, lo + past_lo, np.where(nearer_lo, lo, hi))
+    turns the vessel poorly. A `GraspPlan.yaw_offset`; the range stays readable
+    (`clear`), so a pour that turns the grasp keeps the handle where it may lie."""
+
+    body: str
+    lo: float
+    hi: float
+
+    def clear(self, rel: np.ndarray) -> np.ndarray:
+        """Whether a handle at `rel` (rad, measured as above) lies between `lo` and `hi`."""
+        return (np.asarray(rel) - self.lo) % (2 * np.pi) <= self.hi - self.lo
+
+    def __call__(self, env: DexEnv) -> np.ndarray:
+        yaw = body_yaw(env.view.body_quat(self.body).cpu().numpy())
+        past_lo = (yaw - self.lo) % (2 * np.pi)
+        nearer_lo = past_lo - (self.hi - self.lo) > 2 * np.pi - past_lo
+        rel = np.where(self.clear(yaw), self.lo + past_lo,
+                       np.where(nearer_lo, self.lo, self.hi))
         return -rel
-    return offset
 
 
 def task_goal(env: DexEnv) -> np.ndarray:
@@ -434,10 +440,8 @@ class PourPlan:
     fingers only once the hand is turned over.)
     A `round_body` vessel (a cup, a can: round about its vertical axis) may be held from any
     side: a hand whose mount grossly misses the plan's grasp or pour (an arm's reach and
-    wrist limits) takes the turn about that axis its mount reaches best. A round body with
-    a handle (the mug) names where the handle may lie, `handle` = (`lo`, `hi`) as
-    `handle_between`'s (the plan's grasp yaw is that function's): only turns that keep it
-    there are taken."""
+    wrist limits) takes the turn about that axis its mount reaches best; one whose grasp
+    yaw is a `HandleBetween` (the mug) only the turns that keep its handle in that range."""
 
     grasp: GraspPlan
     tilt: float
@@ -451,7 +455,6 @@ class PourPlan:
     tip: float | None = None
     further: float = 0.0
     round_body: bool = False
-    handle: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
