@@ -120,6 +120,14 @@ def test_wuji_holds_the_hammer_further_from_its_palm_on_the_fr3():
     assert _solved("FunctionalHammerStrike", "fr3_wuji", seed=0, enough=4, keys=keys) == 4
 
 
+def test_sharpa_hangs_the_pen_from_its_tips_with_the_long_part_back():
+    """`HandSpec.hang_back`: pinched with the pen's long part out past its fingertips, the
+    Sharpa hand loses these four pens in the tip-down turn (0 of 4 inserted); with it
+    back towards the wrist, all four go in."""
+    keys = eval_keys(0, [3, 4, 7, 8])
+    assert _solved("InsertPen", "floating_sharpa", seed=0, enough=4, keys=keys) == 4
+
+
 def test_push_expert_leans_the_fingers_where_the_arm_cannot_hang_them():
     """PushT on the FR3: with the fingers straight down the arm missed the far pushes by
     ~10 cm; leaning them out where it cannot reach (`LEANS`), these 4 are solved (2 of

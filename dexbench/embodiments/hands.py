@@ -78,6 +78,10 @@ class HandSpec:
     """Added (rad) to a pour's `grasp_turn` (about the palm normal) for a side grasp round a
     vessel's body: a hand whose fingers lie far apart reaches the rim with its middle
     finger while its lowest finger rests on the table, unless its fingers slant down."""
+    hang_back: bool = False
+    """Pinching a slender object off its middle to turn it end-down (`PinchPlan.hangs`):
+    take the grasp whose longer part lies back towards the wrist, not out past the
+    fingertips (False: whichever of the two is nearer the hand's yaw)."""
     soft_contacts: bool = False
     """Give the hand's geoms the Shadow hand's contact softness (`SOFT_CONTACT`) instead of
     its file's: LEAP's sets solref 1e-4 s and solimp 0.999, far stiffer than the 4 ms step
@@ -315,6 +319,11 @@ HANDS: dict[str, HandSpec] = {
         # far edge and the cup swings out; 3 cm back along the fingers they pinch the wall.
         # Searched on 6 episodes (0.02 m grid): floating 1/6 -> 6/6, fr3 and ur10e 6/6.
         shifts={"rim": (-0.03, 0.0, 0.0)},
+        # InsertPen (the pen pinched 2 cm off its middle, then turned tip-down): with the
+        # long part out past the fingertips the pen slides out of the tips in the turn;
+        # back under the palm it stays. Floating, episodes 0-11: 6 -> 12 of 12 (the Shadow
+        # hand 9 -> 6 and the Wuji hand 12 -> 11 that way round: theirs stay unset).
+        hang_back=True,
         collection="sharpa_wave",
         sides={"right": _sharpa_side("right"), "left": _sharpa_side("left")},
         synergies={

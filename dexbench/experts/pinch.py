@@ -193,9 +193,17 @@ class PinchExpert:
 
     def _grasp_rot(self, current: np.ndarray) -> np.ndarray:
         """(N, 3, 3) palm-down frames with the tips' line across the object's axis, of the
-        two the one nearest the hand's current yaw."""
+        two the one nearest the hand's current yaw, or, for an object that hangs from a
+        hand that holds it so (`HandSpec.hang_back`), the one whose fingers point away
+        from the object's longer part (from the pinched point to its body's origin)."""
         axis = self.env.view.axis(*self.axis).cpu().numpy()
         yaw = np.arctan2(axis[:, 1], axis[:, 0]) + np.pi / 2 - self.line_yaw
+        if self.plan.hangs and self.env.embodiment.hand.hang_back:
+            view = self.env.view
+            longer = (view.body_pos(self.body) - view.point_pos(self.body, self.point)
+                      ).cpu().numpy()
+            out = longer[:, 0] * np.cos(yaw) + longer[:, 1] * np.sin(yaw) > 0.0
+            return palm_down(wrap(yaw + np.pi * out))
         now = np.arctan2(current[:, 1, 0], current[:, 0, 0])
         return palm_down(wrap(now + (yaw - now + np.pi / 2) % np.pi - np.pi / 2))
 

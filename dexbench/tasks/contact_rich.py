@@ -103,7 +103,7 @@ def pinch_and_insert(obj: str, hole: str, point: tuple, raised: float) -> Sequen
     """Pinch a slender `obj` across its barrel at `point`, lift it above `raised` (m),
     turn it tip-down over `hole` and lower it in; dropped or stalled, pinch it again."""
     return lift_then_insert(
-        PinchPlan(obj, point=point, depth=0.004, lift=0.25, level=0.85),
+        PinchPlan(obj, point=point, depth=0.004, lift=0.25, level=0.85, hangs=True),
         InsertPlan(obj, hole, head="tip", shaft="long", synergy="tip_pinch"), raised)
 
 

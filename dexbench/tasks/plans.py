@@ -206,7 +206,10 @@ class PinchPlan:
     the object's `width` (m) across the tips instead, they are levelled where they stand
     that far apart, wherever that is on each hand's closing. With `target(env) -> (N, 3)`
     the risen hand then carries the object until its `goal_point` (default: the pinched
-    point) is there, and holds it (a thin object pulled out of a container)."""
+    point) is there, and holds it (a thin object pulled out of a container). An object
+    that `hangs` is turned end-down next (a pen into a holder): a hand whose spec says so
+    (`HandSpec.hang_back`) takes of the two grasps the one with its longer part back
+    towards the wrist."""
 
     obj: str
     point: PointRef = (0.0, 0.0, 0.0)
@@ -222,6 +225,7 @@ class PinchPlan:
     width: float | None = None
     target: EnvFn | None = None
     goal_point: PointRef | None = None
+    hangs: bool = False
 
 
 @dataclass(frozen=True)
