@@ -120,6 +120,13 @@ def test_wuji_holds_the_hammer_further_from_its_palm_on_the_fr3():
     assert _solved("FunctionalHammerStrike", "fr3_wuji", seed=0, enough=4, keys=keys) == 4
 
 
+def test_wuji_hooks_the_kettle_handle_at_its_own_place():
+    """`HandSpec.shifts["handle"]`: at the Shadow hand's place on the kettle's handle the
+    Wuji hand pours none of these four (0 of 4); 1 cm along hand -y, all four."""
+    keys = eval_keys(0, [0, 1, 3, 9])
+    assert _solved("GraspKettle", "floating_wuji", seed=0, enough=4, keys=keys) == 4
+
+
 def test_sharpa_hangs_the_pen_from_its_tips_with_the_long_part_back():
     """`HandSpec.hang_back`: pinched with the pen's long part out past its fingertips, the
     Sharpa hand loses these four pens in the tip-down turn (0 of 4 inserted); with it

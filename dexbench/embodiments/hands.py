@@ -73,7 +73,8 @@ class HandSpec:
     put the same kind of grasp elsewhere on the object. `vessel`: a pour's side grasp
     round a vessel's body (a thicker palm or longer fingers start inside the vessel or
     hold it out of their hook); `rim`: a top grasp across a cup's rim; `tool`: a top grasp
-    across a tool's handle next to its heavy head (the hammer)."""
+    across a tool's handle next to its heavy head (the hammer); `handle`: a hook round a
+    vessel's handle bar from outside (the kettle)."""
     vessel_turn: float = 0.0
     """Added (rad) to a pour's `grasp_turn` (about the palm normal) for a side grasp round a
     vessel's body: a hand whose fingers lie far apart reaches the rim with its middle
@@ -421,7 +422,11 @@ HANDS: dict[str, HandSpec] = {
         # a grid of +-0.01 on each axis on fr3_wuji (episodes 0-7: 2 of 8; z 0.022 and
         # 0.032 6, y +0.01 4, the rest 0), then z 0.027 on 20 episodes: FR3 4 -> 14,
         # floating 18 -> 18; 12 episodes: UR10e 4 -> 11, xArm7 0 -> 4.
-        shifts={"tool": (-0.023, 0.007, 0.027)},
+        # The kettle: hooked 1 cm further along hand -y on its handle bar, the floating hand
+        # lifts and pours it in 7 of episodes 0-7 (3 at the Shadow hand's place), 9 of
+        # 8-19 (5): a grid of +-0.01 on each axis, then y -0.005..-0.02 (4, 7, 3, 2 of 8).
+        # The arms as before (12 episodes: FR3 2 -> 3, UR10e 11 -> 10, xArm7 8 -> 8).
+        shifts={"tool": (-0.023, 0.007, 0.027), "handle": (0.0, -0.01, 0.0)},
         collection="wuji_hand",
         sides={"right": _wuji_side("right"), "left": _wuji_side("left")},
         synergies={

@@ -177,7 +177,7 @@ class GraspKettle(PourTask):
         GraspPlan("kettle", point=("handle", (0.0, 0.0, 0.025)), shift=(-0.02, 0.0, -0.02),
                   yaw="body", yaw_offset=-math.pi / 2, side=True, synergy="hook",
                   target=object_point("mug", "rim", 0.09), goal_point="spout",
-                  standoff=0.02),
+                  standoff=0.02, hand_shift="handle"),
         tilt=0.3, turn_rate=0.8, about=(-1.0, 0.0, 0.0), squeeze=2.0)
 
     def make_objects(self, spec: mujoco.MjSpec) -> dict[str, ObjectInfo]:
